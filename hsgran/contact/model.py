@@ -65,7 +65,7 @@ REC_T_CONTACT = 19  #: contact duration (elastic stage only, Hertz) [s]
 REC_SIZE = 20
 
 
-@njit
+@njit(inline="always")
 def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, curv, row, rec,
             plasticity, friction, rolling, adhesion, rotation, diagnostics):
     """Apply one collision to two bodies (velocities and spins updated in place).
@@ -299,7 +299,7 @@ def make_resolver(effects: Effects, diagnostics: bool = False):
     return _RESOLVERS[key]
 
 
-@njit
+@njit(inline="always")
 def _resolve_batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2,
                    curv, rows, pair_index, recs, plasticity, friction, rolling, adhesion,
                    rotation, diagnostics):
