@@ -1,0 +1,536 @@
+"""The ``hsgran`` command line (layer 6: may import everything).
+
+``main`` parses the command line with :mod:`argparse` subcommands and hands the parsed
+arguments to one function per subcommand (:data:`HANDLERS`). More subcommands (run, render,
+plot, validate) plug in the same way: an ``_add_NAME_parser`` function and a handler.
+
+Bad input never shows a traceback: every :class:`~hsgran.errors.InputError`, and every usage
+error of argparse itself, becomes exactly one line ``hsgran: error: ...`` on stderr and exit code
+:data:`~hsgran.errors.EXIT_BAD_INPUT` (2). Numbers are parsed here rather than by argparse so
+that ``nan`` and ``inf`` are refused with the option named (``--radius: must be a finite number
+> 0, got 'nan'``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import re
+import sys
+import textwrap
+from collections.abc import Callable
+from dataclasses import asdict, replace
+
+import numpy as np
+
+from hsgran import __version__
+from hsgran.effects import Effects
+from hsgran.errors import EXIT_BAD_INPUT, InputError, did_you_mean
+from hsgran.impact import (
+    SOLID_SPHERE_INERTIA,
+    ImpactResult,
+    oblique_velocity,
+    sphere_mass,
+    sphere_sphere_impact,
+    sphere_wall_impact,
+)
+from hsgran.materials import (
+    Contact,
+    Material,
+    MaterialLibrary,
+    check_material,
+    effective_modulus,
+    read_toml,
+    with_overrides,
+)
+
+PROG = "hsgran"
+
+#: What MODEL.md marks as our own reconstruction; said by ``impact --help`` and under the table.
+RECONSTRUCTION_NOTE = (
+    "Parts of this model are our reconstruction, marked [OURS] in MODEL.md: the elastic-plastic "
+    "and fully plastic stages (§3.3-3.4), the f0 estimate of the adhesion line force from a work "
+    "of adhesion (§3.8) and the rolling couple inside a collision (§5.2)."
+)
+
+#: The same, as the one last line of the ``hsgran impact`` table.
+RECONSTRUCTION_LINE = ("note: our reconstruction ([OURS] in MODEL.md): §3.3-3.4 plastic stages, "
+                       "§3.8 f0 estimate, §5.2 rolling couple")
+
+#: Frame of every vector that ``hsgran impact`` reads or prints.
+IMPACT_FRAME = (
+    "wall normal +z (two spheres: +z points from the resting sphere's centre to the moving "
+    "one's), the sphere moves towards +x before impact, spin about +y = n x t (positive = "
+    "forward rolling, topspin); SI units"
+)
+
+#: argparse takes '-1e3' or '-inf' for an option unless it looks like a negative number; its own
+#: pattern misses exponents and inf/nan, so ``--spin -1e3`` would be a usage error. None of
+#: hsgran's options looks like a number, so widening the pattern cannot hide an option.
+_NEGATIVE_NUMBER = re.compile(
+    r"^-(?:(?:\d+\.?\d*|\.\d+)(?:e[-+]?\d+)?|inf(?:inity)?|nan)$", re.IGNORECASE)
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose usage errors are InputErrors (one line, no usage dump).
+
+    Abbreviated long options are refused: a script that abbreviates would break as soon as a
+    new option shares the prefix.
+    """
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
+        #: Subcommand parsers by name (filled by :func:`build_parser`).
+        self.commands: dict[str, argparse.ArgumentParser] = {}
+
+    def options(self) -> list[str]:
+        """Every long option string this parser knows."""
+        return [o for a in self._actions for o in a.option_strings if o.startswith("--")]
+
+    def error(self, message: str):
+        raise InputError(f"{message} (see '{self.prog} --help')")
+
+
+# ---- numbers from the command line ------------------------------------------------------
+
+def _number(text: str | None, option: str, requirement: str = "a finite number",
+            accept: Callable[[float], bool] | None = None) -> float | None:
+    """Parse ``text`` given to ``option``; ``None`` stays ``None``.
+
+    Raises:
+        InputError: not a number, not finite, or refused by ``accept`` (message ``requirement``).
+    """
+    if text is None:
+        return None
+    try:
+        x = float(text)
+    except ValueError:
+        x = math.nan
+    if not math.isfinite(x) or (accept is not None and not accept(x)):
+        raise InputError(f"must be {requirement}, got {text!r}", option)
+    return x
+
+
+def _positive(text, option):
+    return _number(text, option, "a finite number > 0", lambda x: x > 0.0)
+
+
+def _non_negative(text, option):
+    return _number(text, option, "a finite number >= 0", lambda x: x >= 0.0)
+
+
+# ---- output helpers ----------------------------------------------------------------------
+
+def _json_ready(value):
+    """``value`` with every non-finite float turned into ``None`` (strict JSON)."""
+    if isinstance(value, dict):
+        return {k: _json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_json_ready(v) for v in value]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (float, np.floating)):
+        return float(value) if math.isfinite(value) else None
+    return value
+
+
+def _fmt(value) -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, (bool, np.bool_)):
+        return "yes" if value else "no"
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "(" + ", ".join(_fmt(v) for v in value) + ")"
+    if isinstance(value, (float, int, np.floating)):
+        x = float(value)
+        if math.isnan(x):
+            return "n/a"
+        if math.isinf(x):
+            return "inf" if x > 0 else "-inf"
+        return f"{x:.6g}" if x != 0.0 else "0"
+    return str(value)
+
+
+def _table(rows: list[tuple[str, object, str]]) -> str:
+    cells = [(q, _fmt(v), u) for q, v, u in rows]
+    wq = max(len("quantity"), *(len(q) for q, _, _ in cells))
+    wv = max(len("value"), *(len(v) for _, v, _ in cells))
+    lines = [f"{'quantity':<{wq}}  {'value':<{wv}}  unit"]
+    lines += [f"{q:<{wq}}  {v:<{wv}}  {u}".rstrip() for q, v, u in cells]
+    return "\n".join(lines)
+
+
+# ---- hsgran impact -------------------------------------------------------------------------
+
+def _paragraphs(*paragraphs: str, width: int = 79) -> str:
+    """Paragraphs filled to ``width`` for a raw-text argparse description."""
+    return "\n\n".join(textwrap.fill(" ".join(p.split()), width) for p in paragraphs) + "\n"
+
+
+_IMPACT_DESCRIPTION = _paragraphs(
+    "One collision: a sphere hitting a wall (--wall MAT), or a sphere hitting another sphere "
+    "at rest (--other MAT --other-radius R2), computed with the collision model of Yu, "
+    "Elghannay & Tafti (2017) as specified in MODEL.md. Prints a table, or one JSON object "
+    "with --json.",
+    f"Frame: {IMPACT_FRAME}. The resting sphere lies below the moving one, so --angle has the "
+    "same meaning for a wall and for a sphere.",
+    "Every effect is on unless --effects picks a subset (comma-separated, from: "
+    f"{', '.join(Effects.names())}; 'none' for none); 'friction' needs 'rotation' and "
+    "'rolling_resistance' needs 'friction'. 'gravity' is accepted and ignored (one impact has "
+    "no free flight). The pair's contact properties come from the built-in library or a "
+    "--materials file, with the overrides below applied; with 'friction' on, the pair needs a "
+    "sliding friction (--friction, or sliding_friction in a --materials file).",
+    RECONSTRUCTION_NOTE,
+)
+
+_IMPACT_EPILOG = """\
+examples:
+  hsgran impact --sphere steel --wall steel --radius 0.005 --speed 1 --angle 0 \\
+      --effects plasticity
+  hsgran impact --sphere alumina --wall glass --radius 0.0025 --speed 3.9 \\
+      --angle 40 --restitution 0.98 --json
+  hsgran impact --sphere steel --other steel --radius 0.005 --other-radius 0.005 \\
+      --speed 2 --angle 30 --spin -100 --friction 0.3
+"""
+
+
+def _add_impact_parser(sub) -> None:
+    p = sub.add_parser(
+        "impact", help="one sphere-wall or sphere-sphere collision",
+        description=_IMPACT_DESCRIPTION, epilog=_IMPACT_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    bodies = p.add_argument_group("bodies")
+    bodies.add_argument("--sphere", metavar="MAT", required=True,
+                        help="material of the moving sphere")
+    target = bodies.add_mutually_exclusive_group(required=True)
+    target.add_argument("--wall", metavar="MAT", help="material of the wall (flat, fixed)")
+    target.add_argument("--other", metavar="MAT",
+                        help="material of the other sphere, at rest below the moving one")
+    bodies.add_argument("--radius", metavar="R", required=True,
+                        help="radius of the moving sphere [m]")
+    bodies.add_argument("--other-radius", metavar="R2",
+                        help="radius of the other sphere [m] (required with --other)")
+    bodies.add_argument("--materials", metavar="FILE.toml",
+                        help="[materials.NAME] and [[contacts]] tables added to the built-ins")
+    motion = p.add_argument_group("motion before impact")
+    motion.add_argument("--speed", metavar="V", required=True,
+                        help="speed of the moving sphere's centre [m/s]")
+    motion.add_argument("--angle", metavar="DEG", required=True,
+                        help="impact angle from the wall normal, in [0, 90) [deg]")
+    motion.add_argument("--spin", metavar="W", default="0",
+                        help="spin about n x t [rad/s]; > 0 forward rolling (topspin), "
+                             "< 0 backspin (default 0; needs the 'rotation' effect)")
+    model = p.add_argument_group("model")
+    model.add_argument("--effects", metavar="LIST",
+                       help="comma-separated effects to switch on (default: all)")
+    model.add_argument("--friction", metavar="MU_S",
+                       help="sliding friction coefficient of the pair [-]")
+    model.add_argument("--rolling-friction", metavar="MU_R",
+                       help="rolling friction coefficient of the pair [-] (couple mu_r R* F_n)")
+    model.add_argument("--restitution", metavar="E_N",
+                       help="prescribed normal restitution in [0, 1]; bypasses the normal model")
+    model.add_argument("--yield-stress", metavar="PA",
+                       help="yield stress of the moving sphere's material, and of the other "
+                            "sphere's with --other [Pa]; not of a wall (the pair yields at "
+                            "the smaller of its two yield stresses)")
+    model.add_argument("--work-of-adhesion", metavar="J_M2",
+                       help="work of adhesion of the pair [J/m^2] (f0 estimated from it)")
+    out = p.add_argument_group("output")
+    out.add_argument("--json", action="store_true",
+                     help="print one JSON object (SI units, frame as above) instead of a table")
+
+
+def _impact_effects(text: str | None) -> Effects:
+    if text is None:
+        effects = Effects.all()
+    else:
+        names = [s.strip() for s in text.split(",") if s.strip()]
+        effects = Effects.parse([] if names == ["none"] else names, key="--effects")
+    # 'gravity' has nothing to act on during one instantaneous impact.
+    return effects.without("gravity")
+
+
+def _library(path: str | None) -> MaterialLibrary:
+    lib = MaterialLibrary()
+    if path is None:
+        return lib
+    try:
+        doc = read_toml(path)
+    except InputError as exc:
+        raise InputError(str(exc), "--materials") from None
+    try:
+        lib.add_tables(doc, origin=path)
+    except InputError as exc:
+        raise InputError(str(exc), path) from None
+    return lib
+
+
+def _sphere_material(lib: MaterialLibrary, name: str, option: str,
+                     yield_stress: float | None) -> Material:
+    m = lib.material(name, option)
+    if not math.isfinite(m.density):
+        raise InputError(f"material '{name}' has no finite density: it can only be a wall",
+                         option)
+    if yield_stress is not None:
+        m = check_material(replace(m, yield_stress=yield_stress), f"{option} {name}")
+    return m
+
+
+def _contact_overrides(args: argparse.Namespace) -> dict:
+    """The pair overrides given on the command line, parsed (``None`` = not given)."""
+    return {
+        "sliding_friction": _non_negative(args.friction, "--friction"),
+        "rolling_friction": _non_negative(args.rolling_friction, "--rolling-friction"),
+        "restitution": _number(args.restitution, "--restitution", "a finite number in [0, 1]",
+                               lambda x: 0.0 <= x <= 1.0),
+        "work_of_adhesion": _non_negative(args.work_of_adhesion, "--work-of-adhesion"),
+    }
+
+
+def _pair_contact(lib: MaterialLibrary, a: str, b: str, overrides: dict,
+                  effects: Effects) -> Contact:
+    contact = lib.contact(a, b)
+    if overrides["work_of_adhesion"] is not None:
+        # A line force declared for the pair would clash with the work of adhesion given here.
+        contact = replace(contact, adhesion_line_force=None)
+    contact = with_overrides(contact, **overrides)
+    if effects.friction and contact.sliding_friction is None:
+        raise InputError(
+            f"no sliding friction is known for the pair {a}/{b} and the 'friction' effect is on: "
+            "pass --friction MU_S (or declare sliding_friction in a [[contacts]] table of a "
+            "--materials file), or leave 'friction' out of --effects")
+    return contact
+
+
+def cmd_impact(args: argparse.Namespace) -> int:
+    """``hsgran impact``: one collision, printed as a table or as JSON.
+
+    Returns:
+        Exit code 0.
+
+    Raises:
+        InputError: any bad option, material or combination.
+    """
+    radius = _positive(args.radius, "--radius")
+    speed = _positive(args.speed, "--speed")
+    angle = _number(args.angle, "--angle", "a finite number in [0, 90) degrees from the normal",
+                    lambda x: 0.0 <= x < 90.0)
+    spin = _number(args.spin, "--spin")
+    yield_stress = _positive(args.yield_stress, "--yield-stress")
+    if args.other is not None and args.other_radius is None:
+        raise InputError("missing value: the radius of the other sphere [m] is required with "
+                         "--other", "--other-radius")
+    if args.wall is not None and args.other_radius is not None:
+        raise InputError("only applies with --other (a wall has no radius)", "--other-radius")
+    other_radius = _positive(args.other_radius, "--other-radius")
+    overrides = _contact_overrides(args)
+    effects = _impact_effects(args.effects)
+    if spin != 0.0 and not effects.rotation:
+        raise InputError("a spin needs the 'rotation' effect; add it to --effects", "--spin")
+
+    lib = _library(args.materials)
+    sphere = _sphere_material(lib, args.sphere, "--sphere", yield_stress)
+    if args.wall is not None:
+        body2 = lib.material(args.wall, "--wall")
+    else:
+        body2 = _sphere_material(lib, args.other, "--other", yield_stress)
+    contact = _pair_contact(lib, sphere.name, body2.name, overrides, effects)
+
+    velocity = oblique_velocity(speed, angle)
+    omega = np.array([0.0, spin, 0.0])
+    if args.wall is not None:
+        result = sphere_wall_impact(sphere, body2, radius, velocity, omega, contact=contact,
+                                    effects=effects)
+        r_eff, m_eff = radius, sphere_mass(sphere, radius)
+    else:
+        result = sphere_sphere_impact(sphere, body2, radius, other_radius, velocity,
+                                      np.zeros(3), omega, np.zeros(3), contact=contact,
+                                      effects=effects)
+        m1, m2 = sphere_mass(sphere, radius), sphere_mass(body2, other_radius)
+        r_eff, m_eff = 1.0 / (1.0 / radius + 1.0 / other_radius), 1.0 / (1.0 / m1 + 1.0 / m2)
+
+    inputs = {
+        "mode": "sphere-wall" if args.wall is not None else "sphere-sphere",
+        "sphere": sphere.name, "wall": args.wall, "other": args.other,
+        "radius": radius, "other_radius": other_radius,
+        "speed": speed, "angle": angle, "spin": spin,
+        "velocity_before": velocity, "angular_velocity_before": omega,
+        "normal": [0.0, 0.0, 1.0], "frame": IMPACT_FRAME,
+        "materials_file": args.materials,
+        "overrides": {**overrides, "yield_stress": yield_stress},
+        "sphere_material": asdict(sphere),
+        ("wall_material" if args.wall is not None else "other_material"): asdict(body2),
+        "contact": asdict(contact),
+        "effective_radius": r_eff, "effective_mass": m_eff,
+        "effective_modulus": effective_modulus(sphere, body2),
+    }
+    derived = _impact_derived(result, velocity, omega, radius, other_radius)
+    if args.json:
+        doc = {**result.to_dict(), "derived": derived, "input": inputs,
+               "effects": list(effects.enabled()), "version": __version__}
+        print(json.dumps(_json_ready(doc), indent=2, allow_nan=False))
+    else:
+        print(_impact_table(result, inputs, derived, effects, sphere, body2, contact))
+    return 0
+
+
+def _slip_x(v1, w1, v2, w2, r1, r2) -> float:
+    """x component of the contact-point slip ΔV = (V1 − V2) − (R1 ω1 + R2 ω2) × n, n = +z."""
+    return float((v1[0] - v2[0]) - (r1 * w1[1] + r2 * w2[1]))
+
+
+def _impact_derived(result: ImpactResult, velocity, omega, radius: float,
+                    other_radius: float | None) -> dict:
+    r2 = 0.0 if other_radius is None else other_radius
+    v_after, w_after = result.velocity_after, result.angular_velocity_after
+    v2_after, w2_after = result.other_velocity_after, result.other_angular_velocity_after
+    rel_n_after = float(v_after[2] - v2_after[2])
+    slip_after = _slip_x(v_after, w_after, v2_after, w2_after, radius, r2)
+    v_t0 = float(velocity[0])
+    separating = rel_n_after > 0.0
+    return {
+        "tangential_velocity_before": v_t0,
+        "tangential_velocity_after": float(v_after[0]),
+        "e_t": float(v_after[0]) / v_t0 if v_t0 > 0.0 else math.nan,
+        "slip_before": _slip_x(velocity, omega, np.zeros(3), np.zeros(3), radius, r2),
+        "slip_after": slip_after,
+        "rebound_angle": (math.degrees(math.atan2(float(v_after[0] - v2_after[0]), rel_n_after))
+                          if separating else math.nan),
+        "contact_patch_rebound_angle": (math.degrees(math.atan2(slip_after, rel_n_after))
+                                        if separating else math.nan),
+        "spin_change": float(w_after[1] - omega[1]),
+        "inertia_factor": SOLID_SPHERE_INERTIA,
+    }
+
+
+def _governing(sphere: Material, body2: Material, wall: bool) -> str:
+    """Which body's yield stress governs the pair (the smaller one, MODEL.md §2)."""
+    if sphere.yield_stress == body2.yield_stress:
+        return "both"
+    if sphere.yield_stress < body2.yield_stress:
+        return "sphere"
+    return "wall" if wall else "other sphere"
+
+
+def _impact_table(result: ImpactResult, inputs: dict, derived: dict, effects: Effects,
+                  sphere: Material, body2: Material, contact: Contact) -> str:
+    wall = inputs["mode"] == "sphere-wall"
+    crit = result.critical
+    target = (f"a {body2.name} wall" if wall else
+              f"a {body2.name} sphere (R2 = {_fmt(inputs['other_radius'])} m) at rest")
+    rows = [
+        ("impact speed V", inputs["speed"], "m/s"),
+        ("angle from the normal", inputs["angle"], "deg"),
+        ("spin before (about +y)", inputs["spin"], "rad/s"),
+        ("normal impact speed v0", result.impact_speed, "m/s"),
+        ("stage", result.stage, ""),
+        ("regime", result.regime, ""),
+        ("captured", result.captured, ""),
+        ("normal restitution e_n", result.e_n, "-"),
+        ("tangential restitution e_t", derived["e_t"], "-"),
+        ("velocity after", result.velocity_after, "m/s"),
+        ("angular velocity after", result.angular_velocity_after, "rad/s"),
+    ]
+    if not wall:
+        rows += [("other sphere velocity after", result.other_velocity_after, "m/s"),
+                 ("other sphere angular velocity after", result.other_angular_velocity_after,
+                  "rad/s")]
+    rows += [
+        ("rebound angle from the normal", derived["rebound_angle"], "deg"),
+        ("contact-patch rebound angle", derived["contact_patch_rebound_angle"], "deg"),
+        ("contact-point slip before / after",
+         (derived["slip_before"], derived["slip_after"]), "m/s"),
+        ("normal impulse J_n", result.normal_impulse, "N s"),
+        ("tangential impulse J_t", result.tangential_impulse, "N s"),
+        ("rolling-couple impulse H", result.rolling_impulse, "N m s"),
+        ("max compression delta_max", result.delta_max, "m"),
+        ("residual deformation", result.residual_deformation, "m"),
+        ("max contact radius a_max", result.contact_radius_max, "m"),
+        ("max normal force F_max", result.force_max, "N"),
+        ("contact time (Hertz)", result.contact_time, "s"),
+        ("kinetic energy lost", result.energy_lost, "J"),
+        ("yield speed V_y", crit.speed_y, "m/s"),
+        ("full-plasticity speed V_p", crit.speed_p, "m/s"),
+        ("yield force F_y", crit.force_y, "N"),
+        (f"governing yield stress ({_governing(sphere, body2, wall)})",
+         min(sphere.yield_stress, body2.yield_stress), "Pa"),
+        ("effective radius R*", inputs["effective_radius"], "m"),
+        ("effective mass m*", inputs["effective_mass"], "kg"),
+        ("effective modulus E*", inputs["effective_modulus"], "Pa"),
+        ("sliding friction mu_s", contact.sliding_friction, "-"),
+        ("rolling friction mu_r", contact.rolling_friction, "-"),
+        ("prescribed restitution", contact.restitution, "-"),
+    ]
+    head = "\n".join(textwrap.fill(line, 79, subsequent_indent="  ") for line in (
+        f"hsgran impact: {sphere.name} sphere (R = {_fmt(inputs['radius'])} m) on {target}",
+        f"frame: {IMPACT_FRAME}",
+        f"effects: {', '.join(effects.enabled()) or 'none'}"))
+    return f"{head}\n\n{_table(rows)}\n\n{RECONSTRUCTION_LINE}"
+
+
+# ---- main --------------------------------------------------------------------------------
+
+#: Handler of each subcommand: takes the parsed arguments, returns the exit code.
+HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
+    "impact": cmd_impact,
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The ``hsgran`` argument parser with every subcommand."""
+    parser = _Parser(
+        prog=PROG,
+        description="Event-driven hard-sphere granular simulator with the impulse-based "
+                    "collision model of Yu, Elghannay & Tafti (2017).")
+    parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    _add_impact_parser(sub)
+    parser.commands = dict(sub.choices)
+    return parser
+
+
+def _unrecognized(parser: _Parser, command: str | None, extra: list[str]) -> InputError:
+    """Error for arguments no parser took, with a hint for a misspelt option."""
+    target = parser.commands.get(command, parser)
+    options = target.options() if isinstance(target, _Parser) else []
+    word = extra[0].split("=", 1)[0]
+    hint = did_you_mean(word, options) if word.startswith("--") else ""
+    return InputError(f"unrecognized arguments: {' '.join(extra)}{hint} "
+                      f"(see '{target.prog} --help')")
+
+
+def _one_line(message: str) -> str:
+    return " ".join(str(message).split())
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the ``hsgran`` command line.
+
+    Args:
+        argv: Arguments without the program name (default: ``sys.argv[1:]``).
+
+    Returns:
+        Exit code: 0 on success, :data:`~hsgran.errors.EXIT_BAD_INPUT` (2) on bad input.
+    """
+    parser = build_parser()
+    try:
+        try:
+            args, extra = parser.parse_known_args(argv)
+        except SystemExit as exc:  # --help and --version exit through argparse
+            return exc.code if isinstance(exc.code, int) else 0
+        if extra:
+            raise _unrecognized(parser, args.command, extra)
+        if args.command is None:
+            raise InputError(f"missing command: one of {', '.join(HANDLERS)} "
+                             f"(see '{PROG} --help')")
+        return HANDLERS[args.command](args)
+    except InputError as exc:
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())
