@@ -38,8 +38,11 @@ NEWTON_RTOL = 1e-13
 #: Newton iteration cap. From the start used below it needs 3–6 steps; 60 only guards
 #: against an infinite loop on non-finite input.
 NEWTON_MAX_ITER = 60
-#: Hertz contact-duration constant: t_c = 2.868 (m*²/(R* E*² v0))^(1/5) (MODEL.md §3.1).
-HERTZ_DURATION_COEF = 2.868
+#: Hertz contact-duration constant C in t_c = C (m*²/(R* E*² v0))^(1/5) (MODEL.md §3.1 rounds it
+#: to 2.868). Exactly, t_c = 2 (δ_max/v0) ∫₀¹ (1 − x^(5/2))^(−1/2) dx with the integral equal to
+#: (2/5) B(2/5, 1/2), and δ_max = (15/16)^(2/5) (m*² v0⁴/(R* E*²))^(1/5), so C = 2.868266...
+HERTZ_DURATION_COEF = (2.0 * 0.4 * math.gamma(0.4) * math.gamma(0.5) / math.gamma(0.9)
+                       * (15.0 / 16.0) ** 0.4)
 
 
 @njit
