@@ -1,0 +1,795 @@
+"""Trajectory files in H5MD 1.1 (HDF5 for molecular data): :class:`TrajectoryWriter` and
+:func:`read_trajectory`.
+
+The layout, every attribute and every unit are described for users in
+``docs/trajectory-format.md``; this docstring only gives the reasons behind the choices.
+
+* Frames are buffered by the caller and appended in blocks (DESIGN.md §4): every dataset is
+  created once, chunked along time and resizable, compressed with ``lzf`` + shuffle (lossless,
+  so a round trip is bit for bit).
+* ``step`` and ``time`` exist once, in ``/particles/all/position``; every other time-dependent
+  element (velocity, angular velocity, box edges, observables) hard-links them, which H5MD 1.1
+  allows for elements sampled together and requires for the box.
+* A killed writer leaves a readable file: the file is flushed after every append, the value
+  datasets of a block are written before ``step``/``time``, and the reader takes the number of
+  frames as the shortest time-dependent dataset, so a block cut in half is dropped whole.
+  ``/parameters/hsgran@complete`` is ``False`` until :meth:`TrajectoryWriter.close`.
+* The box ``edges`` are a time-dependent element (one row per frame, constant) rather than a
+  time-independent dataset, because MDAnalysis (2.x) reads ``box/edges/value[frame]`` whenever
+  ``edges`` exists. They are written only when some axis is periodic: H5MD lets ``edges`` be
+  omitted when every boundary is ``none``, and MDAnalysis would otherwise take a walled box for a
+  periodic cell and apply minimum images through solid walls. The walls' corners are always in
+  ``/parameters/hsgran@box_lower``/``box_upper``.
+* ``unit`` attributes are variable-length ASCII strings in H5MD unit notation (``m s-1``);
+  MDAnalysis looks them up as Python strings, which fixed-length (bytes) attributes are not.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass
+
+import h5py
+import numpy as np
+
+from hsgran.errors import InputError
+
+#: H5MD specification version the files conform to (``/h5md@version``).
+H5MD_VERSION = (1, 1)
+#: Version of the H5MD ``units`` module whose unit strings we write.
+UNITS_MODULE_VERSION = (1, 0)
+#: Version of hsgran's own layout (``/parameters/hsgran@format_version``); bump it on any change
+#: a reader must know about.
+FORMAT_VERSION = 1
+
+PARTICLES = "particles/all"
+OBSERVABLES = "observables"
+PARAMETERS = "parameters/hsgran"
+EVENTS = "hsgran/events"
+
+#: Target size of one chunk [bytes]. lzf + shuffle runs several times faster on 64 KiB chunks
+#: than on 1 MiB ones (measured: 1000-frame blocks of 10 particles, flushed after each block,
+#: ~70 k vs ~17 k frames/s), partly because a chunk that a block leaves half full is compressed
+#: again at every flush until it is full; the per-chunk overhead of HDF5 is still negligible.
+CHUNK_BYTES = 1 << 16
+#: Most rows per chunk (1-D series: step, time, energies, events; 4096 doubles = 32 KiB).
+SERIES_CHUNK_ROWS = 4096
+#: Chunk cache per dataset [bytes]: holds the half-full last chunk between two blocks, so it is
+#: not read back and decompressed when the next block fills it.
+CHUNK_CACHE_BYTES = 1 << 20
+COMPRESSION = "lzf"
+
+#: Units in H5MD's unit notation (units module, "SI" system).
+UNIT_LENGTH = "m"
+UNIT_VELOCITY = "m s-1"
+UNIT_ANGULAR_VELOCITY = "rad s-1"
+UNIT_MASS = "kg"
+UNIT_ENERGY = "J"
+UNIT_TIME = "s"
+UNIT_IMPULSE = "kg m s-1"
+
+#: Observable name in the file → argument of :meth:`TrajectoryWriter.append_frames`.
+ENERGY_OBSERVABLES = {
+    "kinetic_energy_translational": "kinetic_translational",
+    "kinetic_energy_rotational": "kinetic_rotational",
+    "potential_energy": "potential",
+    "dissipated_energy": "dissipated",
+}
+
+#: Event-log datasets: name → (dtype, unit or None).
+EVENT_FIELDS = {
+    "time": (np.float64, UNIT_TIME),
+    "kind": (np.int8, None),
+    "i": (np.int64, None),
+    "j": (np.int64, None),
+    "normal_impulse": (np.float64, UNIT_IMPULSE),
+    "tangential_impulse": (np.float64, UNIT_IMPULSE),
+    "e_n": (np.float64, None),
+    "stage": (np.int8, None),
+    "regime": (np.int8, None),
+}
+
+_ASCII = h5py.string_dtype("ascii")
+_UTF8 = h5py.string_dtype("utf-8")
+
+
+@dataclass
+class Trajectory:
+    """Everything :func:`read_trajectory` finds in a trajectory file (SI units).
+
+    Attributes:
+        time: Frame times [s], shape (F,).
+        step: Frame numbers, shape (F,), int64.
+        position: Positions [m], shape (F, N, 3).
+        velocity: Velocities [m/s], shape (F, N, 3).
+        angular_velocity: Angular velocities [rad/s], shape (F, N, 3), or ``None`` when the
+            scene had no ``rotation``.
+        radius: Radii [m], shape (N,).
+        mass: Masses [kg], shape (N,).
+        material: Material index of each particle, shape (N,), into ``material_names``.
+        material_names: Material names.
+        box_lower: Lower corner of the box [m], shape (3,), or ``None`` without a box.
+        box_upper: Upper corner of the box [m], shape (3,), or ``None`` without a box.
+        periodic: Periodicity of the x, y, z axes.
+        energies: Observable name → values [J], shape (F,): ``kinetic_energy_translational``,
+            ``potential_energy``, ``dissipated_energy`` and, with rotation,
+            ``kinetic_energy_rotational``.
+        events: Event-log field → array, shape (E,), or ``None`` when events were not logged.
+        scene_text: The scene file, verbatim.
+        effects: Effects of the run.
+        seed: Random seed of the run.
+        version: hsgran version that wrote the file.
+        summary: Run summary (empty when the writer did not finish).
+        complete: ``False`` when the writer was interrupted before closing the file.
+        creator_args: Command line or arguments of the run, as recorded.
+    """
+
+    time: np.ndarray
+    step: np.ndarray
+    position: np.ndarray
+    velocity: np.ndarray
+    angular_velocity: np.ndarray | None
+    radius: np.ndarray
+    mass: np.ndarray
+    material: np.ndarray
+    material_names: list[str]
+    box_lower: np.ndarray | None
+    box_upper: np.ndarray | None
+    periodic: tuple[bool, bool, bool]
+    energies: dict[str, np.ndarray]
+    events: dict[str, np.ndarray] | None
+    scene_text: str
+    effects: list[str]
+    seed: int
+    version: str
+    summary: dict
+    complete: bool = True
+    creator_args: str = ""
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames F."""
+        return int(self.time.shape[0])
+
+    @property
+    def n_particles(self) -> int:
+        """Number of particles N."""
+        return int(self.radius.shape[0])
+
+
+class TrajectoryWriter:
+    """Writes an H5MD 1.1 file; frames are buffered by the caller and appended in blocks.
+
+    The whole layout is created here, empty; :meth:`append_frames` and :meth:`append_events`
+    grow it. Use it as a context manager, or call :meth:`close`: only then is the file marked
+    complete. Leaving a ``with`` block through an exception closes the file unmarked.
+
+    Args:
+        path: File to create (overwritten if it exists).
+        radius: Particle radii [m], shape (N,).
+        mass: Particle masses [kg], shape (N,).
+        material: Material index of each particle, shape (N,), int, into ``material_names``.
+        material_names: Material names.
+        box_lower: Lower corner of the box [m], shape (3,), or ``None`` for no box.
+        box_upper: Upper corner of the box [m], shape (3,), or ``None`` for no box.
+        periodic: Periodicity of the x, y, z axes (3 bools); a periodic axis needs a box.
+        angular_velocity: Whether frames carry angular velocities and rotational energy.
+        scene_text: The scene file, stored verbatim.
+        effects: Effects of the run.
+        seed: Random seed of the run.
+        version: hsgran version.
+        log_events: Whether to create the event log (:meth:`append_events`).
+        creator_args: Command line or arguments of the run, for the record.
+
+    Raises:
+        InputError: The file cannot be created, or a periodic axis has no box.
+        ValueError: Arrays of the wrong shape or content.
+    """
+
+    def __init__(
+        self,
+        path,
+        *,
+        radius,
+        mass,
+        material,
+        material_names: list[str],
+        box_lower,
+        box_upper,
+        periodic,
+        angular_velocity: bool,
+        scene_text: str,
+        effects: list[str],
+        seed: int,
+        version: str,
+        log_events: bool,
+        creator_args: str = "",
+    ):
+        radius = np.asarray(radius, dtype=np.float64)
+        if radius.ndim != 1 or radius.shape[0] == 0:
+            raise ValueError(f"radius: expected shape (N,) with N >= 1, got {radius.shape}")
+        n = radius.shape[0]
+        mass = _checked(mass, "mass", (n,), np.float64)
+        material_in = np.asarray(material)
+        if material_in.shape != (n,) or not np.issubdtype(material_in.dtype, np.integer):
+            raise ValueError(
+                f"material: expected integers of shape ({n},), "
+                f"got {material_in.dtype} of shape {material_in.shape}"
+            )
+        material_names = [str(name) for name in material_names]
+        if material_in.min() < 0 or material_in.max() >= len(material_names):
+            raise ValueError(
+                f"material: indices must lie in [0, {len(material_names)}) "
+                f"(one per material name), got [{material_in.min()}, {material_in.max()}]"
+            )
+        periodic = tuple(bool(p) for p in periodic)
+        if len(periodic) != 3:
+            raise ValueError(f"periodic: expected 3 booleans, got {len(periodic)}")
+        if (box_lower is None) != (box_upper is None):
+            raise ValueError("box_lower and box_upper must be given together")
+        if box_lower is not None:
+            box_lower = _checked(box_lower, "box_lower", (3,), np.float64)
+            box_upper = _checked(box_upper, "box_upper", (3,), np.float64)
+            if not (np.all(np.isfinite(box_lower)) and np.all(np.isfinite(box_upper))):
+                raise ValueError("box_lower, box_upper: must be finite")
+            if np.any(box_upper <= box_lower):
+                raise ValueError(
+                    f"box: upper corner {box_upper} must exceed lower corner {box_lower}"
+                )
+        elif any(periodic):
+            raise InputError("a periodic axis needs a box (box_lower and box_upper)")
+        seed_attribute = _seed_attribute(seed)
+
+        self.path = os.fspath(path)
+        self.n_particles = n
+        self.has_angular_velocity = bool(angular_velocity)
+        self.has_events = bool(log_events)
+        self.has_edges = any(periodic)
+        self._edges = None if box_lower is None else box_upper - box_lower
+        self._n_frames = 0
+        self._n_events = 0
+        self._last_step = None
+        self._last_time = None
+        self._closed = True
+        try:
+            self._file = h5py.File(self.path, "w", rdcc_nbytes=CHUNK_CACHE_BYTES)
+        except OSError as exc:
+            raise InputError(
+                f"cannot create trajectory file {self.path}: {_one_line(exc)}"
+            ) from None
+        self._closed = False
+        try:
+            self._create_layout(
+                radius=radius,
+                mass=mass,
+                material=material_in.astype(np.int32),
+                material_names=material_names,
+                box_lower=box_lower,
+                box_upper=box_upper,
+                periodic=periodic,
+                scene_text=str(scene_text),
+                effects=[str(e) for e in effects],
+                seed=seed_attribute,
+                version=str(version),
+                creator_args=str(creator_args),
+            )
+            self._file.flush()
+        except BaseException:
+            self._file.close()
+            self._closed = True
+            raise
+
+    # -- layout ---------------------------------------------------------------------------
+
+    def _create_layout(
+        self,
+        *,
+        radius,
+        mass,
+        material,
+        material_names,
+        box_lower,
+        box_upper,
+        periodic,
+        scene_text,
+        effects,
+        seed,
+        version,
+        creator_args,
+    ):
+        f = self._file
+        n = self.n_particles
+
+        h5md = f.create_group("h5md")
+        h5md.attrs["version"] = np.array(H5MD_VERSION, dtype=np.int32)
+        h5md.create_group("author").attrs["name"] = np.bytes_("hsgran user")
+        creator = h5md.create_group("creator")
+        creator.attrs["name"] = np.bytes_("hsgran")
+        creator.attrs["version"] = np.bytes_(version.encode("ascii", "replace"))
+        units = h5md.create_group("modules/units")
+        units.attrs["version"] = np.array(UNITS_MODULE_VERSION, dtype=np.int32)
+        units.attrs.create("system", "SI", dtype=_ASCII)
+
+        particles = f.create_group(PARTICLES)
+        position = particles.create_group("position")
+        step = position.create_dataset(
+            "step",
+            shape=(0,),
+            maxshape=(None,),
+            dtype=np.int64,
+            chunks=(SERIES_CHUNK_ROWS,),
+            compression=COMPRESSION,
+            shuffle=True,
+        )
+        time = position.create_dataset(
+            "time",
+            shape=(0,),
+            maxshape=(None,),
+            dtype=np.float64,
+            chunks=(SERIES_CHUNK_ROWS,),
+            compression=COMPRESSION,
+            shuffle=True,
+        )
+        _set_unit(time, UNIT_TIME)
+        self._step, self._time = step, time
+        self._position = _create_value(position, (n, 3), np.float64, UNIT_LENGTH)
+        self._velocity = _create_value(
+            self._element(particles, "velocity"), (n, 3), np.float64, UNIT_VELOCITY
+        )
+        self._angular_velocity = None
+        if self.has_angular_velocity:
+            self._angular_velocity = _create_value(
+                self._element(particles, "angular_velocity"),
+                (n, 3),
+                np.float64,
+                UNIT_ANGULAR_VELOCITY,
+            )
+
+        box = particles.create_group("box")
+        box.attrs["dimension"] = np.int32(3)
+        boundary = [b"periodic" if p else b"none" for p in periodic]
+        box.attrs["boundary"] = np.array(boundary, dtype="S8")
+        self._box_edges = None
+        if self.has_edges:
+            self._box_edges = _create_value(
+                self._element(box, "edges"), (3,), np.float64, UNIT_LENGTH
+            )
+
+        _set_unit(particles.create_dataset("radius", data=radius), UNIT_LENGTH)
+        _set_unit(particles.create_dataset("mass", data=mass), UNIT_MASS)
+        particles.create_dataset("species", data=material)
+
+        observables = f.create_group(OBSERVABLES)
+        self._energies = {}
+        for name, argument in ENERGY_OBSERVABLES.items():
+            if argument == "kinetic_rotational" and not self.has_angular_velocity:
+                continue
+            self._energies[argument] = _create_value(
+                self._element(observables, name), (), np.float64, UNIT_ENERGY
+            )
+
+        parameters = f.create_group(PARAMETERS)
+        attrs = parameters.attrs
+        attrs["format_version"] = np.int32(FORMAT_VERSION)
+        attrs["complete"] = np.False_
+        attrs.create("version", version, dtype=_UTF8)
+        attrs.create("scene_text", scene_text, dtype=_UTF8)
+        attrs.create("effects", np.array(effects, dtype=object), dtype=_UTF8)
+        attrs.create("material_names", np.array(material_names, dtype=object), dtype=_UTF8)
+        attrs["seed"] = seed
+        attrs.create("creator_args", creator_args, dtype=_UTF8)
+        attrs.create("summary", "{}", dtype=_UTF8)
+        if box_lower is not None:
+            attrs["box_lower"] = box_lower
+            attrs["box_upper"] = box_upper
+
+        self._events = None
+        if self.has_events:
+            events = f.create_group(EVENTS)
+            self._events = {}
+            for name, (dtype, unit) in EVENT_FIELDS.items():
+                dset = events.create_dataset(
+                    name,
+                    shape=(0,),
+                    maxshape=(None,),
+                    dtype=dtype,
+                    chunks=(SERIES_CHUNK_ROWS,),
+                    compression=COMPRESSION,
+                    shuffle=True,
+                )
+                if unit is not None:
+                    _set_unit(dset, unit)
+                self._events[name] = dset
+
+    def _element(self, parent, name):
+        """A time-dependent element whose step and time are hard links to the position's."""
+        group = parent.create_group(name)
+        group["step"] = self._step
+        group["time"] = self._time
+        return group
+
+    # -- appending ------------------------------------------------------------------------
+
+    def append_frames(
+        self,
+        step,
+        time,
+        position,
+        velocity,
+        angular_velocity,
+        kinetic_translational,
+        kinetic_rotational,
+        potential,
+        dissipated,
+    ) -> None:
+        """Append a block of F frames (F may be 0) and flush the file.
+
+        Args:
+            step: Frame numbers, shape (F,), int, non-decreasing.
+            time: Frame times [s], shape (F,), non-decreasing.
+            position: Positions [m], shape (F, N, 3).
+            velocity: Velocities [m/s], shape (F, N, 3).
+            angular_velocity: Angular velocities [rad/s], shape (F, N, 3); ``None`` exactly when
+                the writer was created with ``angular_velocity=False``.
+            kinetic_translational: Translational kinetic energy [J], shape (F,).
+            kinetic_rotational: Rotational kinetic energy [J], shape (F,); ``None`` exactly when
+                there are no angular velocities.
+            potential: Potential energy [J], shape (F,).
+            dissipated: Energy dissipated so far [J], shape (F,).
+
+        Raises:
+            ValueError: A shape does not match, an optional field is given or missing against
+                the writer's settings, steps or times decrease, or the writer is closed.
+        """
+        self._check_open()
+        step_in = np.asarray(step)
+        if step_in.ndim != 1:
+            raise ValueError(f"step: expected shape (F,), got {step_in.shape}")
+        if step_in.size and not np.issubdtype(step_in.dtype, np.integer):
+            raise ValueError(f"step: expected integers, got {step_in.dtype}")
+        n_new = step_in.shape[0]
+        n = self.n_particles
+        step_arr = step_in.astype(np.int64, copy=False)
+        time_arr = _checked(time, "time", (n_new,), np.float64)
+        values = [
+            (self._position, _checked(position, "position", (n_new, n, 3), np.float64)),
+            (self._velocity, _checked(velocity, "velocity", (n_new, n, 3), np.float64)),
+        ]
+        if self.has_angular_velocity != (angular_velocity is not None):
+            raise ValueError(_optional_message("angular_velocity", self.has_angular_velocity))
+        if self.has_angular_velocity != (kinetic_rotational is not None):
+            raise ValueError(_optional_message("kinetic_rotational", self.has_angular_velocity))
+        if angular_velocity is not None:
+            values.append(
+                (
+                    self._angular_velocity,
+                    _checked(angular_velocity, "angular_velocity", (n_new, n, 3), np.float64),
+                )
+            )
+        given = {
+            "kinetic_translational": kinetic_translational,
+            "kinetic_rotational": kinetic_rotational,
+            "potential": potential,
+            "dissipated": dissipated,
+        }
+        for argument, dset in self._energies.items():
+            values.append((dset, _checked(given[argument], argument, (n_new,), np.float64)))
+        if n_new == 0:
+            return
+        _check_non_decreasing(step_arr, self._last_step, "step")
+        _check_non_decreasing(time_arr, self._last_time, "time")
+        if self._box_edges is not None:
+            values.append((self._box_edges, np.broadcast_to(self._edges, (n_new, 3))))
+
+        start, stop = self._n_frames, self._n_frames + n_new
+        # Values first, step and time last: a writer killed in between leaves values longer
+        # than step, and the reader drops the partial block (frames = shortest dataset).
+        for dset, data in values:
+            _append(dset, data, start, stop)
+        _append(self._time, time_arr, start, stop)
+        _append(self._step, step_arr, start, stop)
+        self._file.flush()
+        self._n_frames = stop
+        self._last_step = step_arr[-1]
+        self._last_time = time_arr[-1]
+
+    def append_events(
+        self,
+        time,
+        kind,
+        i,
+        j,
+        normal_impulse,
+        tangential_impulse,
+        e_n,
+        stage,
+        regime,
+    ) -> None:
+        """Append a block of E logged events (E may be 0) and flush the file.
+
+        Args:
+            time: Event times [s], shape (E,).
+            kind: Event kind codes, shape (E,), int8.
+            i: First particle, shape (E,), int64.
+            j: Partner particle (or wall code), shape (E,), int64.
+            normal_impulse: Normal impulse [N s], shape (E,).
+            tangential_impulse: Tangential impulse [N s], shape (E,).
+            e_n: Normal coefficient of restitution of the impact, shape (E,).
+            stage: Normal-model stage code, shape (E,), int8.
+            regime: Tangential regime code, shape (E,), int8.
+
+        Raises:
+            ValueError: The writer was created with ``log_events=False`` or is closed, or a
+                shape does not match.
+        """
+        self._check_open()
+        if self._events is None:
+            raise ValueError("append_events: this writer was created with log_events=False")
+        given = {
+            "time": time,
+            "kind": kind,
+            "i": i,
+            "j": j,
+            "normal_impulse": normal_impulse,
+            "tangential_impulse": tangential_impulse,
+            "e_n": e_n,
+            "stage": stage,
+            "regime": regime,
+        }
+        n_new = np.shape(time)[0] if np.ndim(time) == 1 else -1
+        if n_new < 0:
+            raise ValueError(f"time: expected shape (E,), got {np.shape(time)}")
+        arrays = {
+            name: _checked(given[name], name, (n_new,), dtype)
+            for name, (dtype, _unit) in EVENT_FIELDS.items()
+        }
+        if n_new == 0:
+            return
+        start, stop = self._n_events, self._n_events + n_new
+        # "time" last, as for frames: the reader keeps the rows every field has.
+        for name in EVENT_FIELDS:
+            if name != "time":
+                _append(self._events[name], arrays[name], start, stop)
+        _append(self._events["time"], arrays["time"], start, stop)
+        self._file.flush()
+        self._n_events = stop
+
+    def set_summary(self, summary: dict) -> None:
+        """Store the run summary (a JSON string in ``/parameters/hsgran@summary``).
+
+        Args:
+            summary: JSON-serialisable mapping; numpy scalars and arrays are converted.
+
+        Raises:
+            ValueError: The summary cannot be written as JSON, or the writer is closed.
+        """
+        self._check_open()
+        try:
+            text = json.dumps(dict(summary), default=_json_default, sort_keys=True)
+        except TypeError as exc:
+            raise ValueError(f"summary: {exc}") from None
+        self._file[PARAMETERS].attrs.create("summary", text, dtype=_UTF8)
+        self._file.flush()
+
+    # -- closing --------------------------------------------------------------------------
+
+    @property
+    def n_frames(self) -> int:
+        """Frames written so far."""
+        return self._n_frames
+
+    @property
+    def n_events(self) -> int:
+        """Events written so far."""
+        return self._n_events
+
+    @property
+    def closed(self) -> bool:
+        """Whether the file is closed."""
+        return self._closed
+
+    def close(self) -> None:
+        """Mark the file complete and close it (a second call does nothing)."""
+        self._finish(complete=True)
+
+    def _finish(self, complete: bool) -> None:
+        if self._closed:
+            return
+        try:
+            if complete:
+                self._file[PARAMETERS].attrs["complete"] = np.True_
+            self._file.flush()
+        finally:
+            self._file.close()
+            self._closed = True
+
+    def __enter__(self) -> TrajectoryWriter:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> None:
+        # A run that failed must not be marked complete; its frames are kept all the same.
+        self._finish(complete=exc_type is None)
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise ValueError(f"trajectory writer for {self.path} is closed")
+
+
+# -- reading ------------------------------------------------------------------------------
+
+
+def read_trajectory(path) -> Trajectory:
+    """Read a whole hsgran trajectory file into memory.
+
+    A file whose writer was killed reads too: it holds every block appended before the kill
+    (``complete`` is then ``False`` and ``summary`` empty).
+
+    Args:
+        path: Trajectory file (``.h5``).
+
+    Returns:
+        The :class:`Trajectory`.
+
+    Raises:
+        InputError: The file does not exist, is not HDF5, or is not an hsgran trajectory; the
+            message is one line.
+    """
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise InputError(f"trajectory file not found: {path}")
+    if os.path.isdir(path):
+        raise InputError(f"{path} is a directory, not a trajectory file")
+    try:
+        is_hdf5 = h5py.is_hdf5(path)
+    except OSError as exc:
+        raise InputError(f"cannot read {path}: {_one_line(exc)}") from None
+    if not is_hdf5:
+        raise InputError(f"{path} is not an HDF5 file, so not an hsgran trajectory")
+    try:
+        # No file locking: the file may be read while a simulation still appends to it.
+        handle = h5py.File(path, "r", locking=False)
+    except OSError as exc:
+        raise InputError(f"cannot open {path}: {_one_line(exc)}") from None
+    with handle as f:
+        for required in ("h5md", f"{PARTICLES}/position/value", PARAMETERS):
+            if not _has(f, required):
+                raise InputError(f"{path} is not an hsgran trajectory (it has no /{required})")
+        try:
+            return _read(f)
+        except (KeyError, ValueError, TypeError, OSError) as exc:
+            raise InputError(
+                f"{path} is not a readable hsgran trajectory: {_one_line(exc)}"
+            ) from None
+
+
+def _read(f: h5py.File) -> Trajectory:
+    particles = f[PARTICLES]
+    position = particles["position"]
+    elements = [position, particles["velocity"]]
+    has_angular = "angular_velocity" in particles
+    if has_angular:
+        elements.append(particles["angular_velocity"])
+    if "edges" in particles["box"]:
+        elements.append(particles["box/edges"])
+    observables = f[OBSERVABLES]
+    names = [name for name in ENERGY_OBSERVABLES if name in observables]
+    elements.extend(observables[name] for name in names)
+    n_frames = min(
+        [position["step"].shape[0], position["time"].shape[0]]
+        + [element["value"].shape[0] for element in elements]
+    )
+
+    params = f[PARAMETERS].attrs
+    boundary = [_text(b) for b in particles["box"].attrs["boundary"]]
+    events = None
+    if EVENTS in f:
+        group = f[EVENTS]
+        n_events = min(group[name].shape[0] for name in EVENT_FIELDS)
+        events = {name: group[name][:n_events] for name in EVENT_FIELDS}
+    return Trajectory(
+        time=position["time"][:n_frames],
+        step=position["step"][:n_frames],
+        position=position["value"][:n_frames],
+        velocity=particles["velocity/value"][:n_frames],
+        angular_velocity=particles["angular_velocity/value"][:n_frames] if has_angular else None,
+        radius=particles["radius"][()],
+        mass=particles["mass"][()],
+        material=particles["species"][()],
+        material_names=[_text(s) for s in params["material_names"]],
+        box_lower=np.asarray(params["box_lower"]) if "box_lower" in params else None,
+        box_upper=np.asarray(params["box_upper"]) if "box_upper" in params else None,
+        periodic=tuple(b == "periodic" for b in boundary),
+        energies={name: observables[name]["value"][:n_frames] for name in names},
+        events=events,
+        scene_text=_text(params["scene_text"]),
+        effects=[_text(s) for s in params["effects"]],
+        seed=int(params["seed"]),
+        version=_text(params["version"]),
+        summary=json.loads(_text(params["summary"])) if "summary" in params else {},
+        complete=bool(params.get("complete", False)),
+        creator_args=_text(params.get("creator_args", "")),
+    )
+
+
+# -- helpers ------------------------------------------------------------------------------
+
+
+def _create_value(group, row_shape, dtype, unit):
+    """The resizable, chunked, compressed ``value`` dataset of a time-dependent element."""
+    row_bytes = int(np.prod(row_shape, dtype=np.int64)) * np.dtype(dtype).itemsize
+    rows = max(1, min(SERIES_CHUNK_ROWS, CHUNK_BYTES // max(row_bytes, 1)))
+    dset = group.create_dataset(
+        "value",
+        shape=(0, *row_shape),
+        maxshape=(None, *row_shape),
+        dtype=dtype,
+        chunks=(rows, *row_shape),
+        compression=COMPRESSION,
+        shuffle=True,
+    )
+    _set_unit(dset, unit)
+    return dset
+
+
+def _set_unit(dset, unit: str) -> None:
+    dset.attrs.create("unit", unit, dtype=_ASCII)
+
+
+def _append(dset, data, start: int, stop: int) -> None:
+    dset.resize(stop, axis=0)
+    dset[start:stop] = data
+
+
+def _checked(value, name: str, shape: tuple, dtype) -> np.ndarray:
+    array = np.asarray(value)
+    if array.shape != shape:
+        raise ValueError(f"{name}: expected shape {shape}, got {array.shape}")
+    return array.astype(dtype, copy=False)
+
+
+def _check_non_decreasing(values: np.ndarray, last, name: str) -> None:
+    # H5MD: step and time are "in monotonically increasing order".
+    if np.any(np.diff(values) < 0) or (last is not None and values[0] < last):
+        raise ValueError(f"{name}: frames must be appended in non-decreasing {name}")
+
+
+def _optional_message(name: str, enabled: bool) -> str:
+    if enabled:
+        return f"{name}: required, the writer was created with angular_velocity=True"
+    return f"{name}: must be None, the writer was created with angular_velocity=False"
+
+
+def _seed_attribute(seed):
+    seed = int(seed)
+    if -(2**63) <= seed < 2**63:
+        return np.int64(seed)
+    if 0 <= seed < 2**64:
+        return np.uint64(seed)
+    raise ValueError(f"seed: {seed} does not fit in 64 bits")
+
+
+def _json_default(obj):
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    raise TypeError(f"{type(obj).__name__} is not JSON-serialisable")
+
+
+def _text(value) -> str:
+    if isinstance(value, bytes | np.bytes_):
+        return value.decode("utf-8", "replace")
+    return str(value)
+
+
+def _has(f: h5py.File, name: str) -> bool:
+    try:
+        return name in f
+    except (KeyError, TypeError, ValueError):
+        return False
+
+
+def _one_line(exc: BaseException) -> str:
+    text = " ".join(str(exc).split())
+    return text or type(exc).__name__

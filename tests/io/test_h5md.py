@@ -1,0 +1,475 @@
+"""Trajectory files (hsgran.io.h5md): round trips, the H5MD 1.1 structure, bad files, interrupted
+writers, and MDAnalysis reading what we write (docs/trajectory-format.md)."""
+
+from __future__ import annotations
+
+import gc
+import json
+import os
+import select
+import subprocess
+import sys
+import textwrap
+
+import h5py
+import numpy as np
+import pytest
+
+from hsgran.errors import InputError
+from hsgran.io import Trajectory, TrajectoryWriter, read_trajectory
+from hsgran.io.h5md import ENERGY_OBSERVABLES, EVENT_FIELDS
+
+N = 7
+BLOCKS = (3, 1, 5)  # frames per appended block: uneven on purpose
+SCENE = '[[materials]]\nname = "glass"\n# a scene with unicode: δ_max, µ\n'
+
+
+def writer_args(*, angular=True, events=True, box=True, periodic=(True, False, False)):
+    rng = np.random.default_rng(42)
+    return dict(
+        radius=rng.uniform(1e-3, 2e-3, N),
+        mass=rng.uniform(1e-5, 2e-5, N),
+        material=np.array([0, 1, 0, 1, 1, 0, 1]),
+        material_names=["glass", "steel"],
+        box_lower=np.array([-0.1, -0.2, 0.0]) if box else None,
+        box_upper=np.array([0.1, 0.2, 0.5]) if box else None,
+        periodic=periodic if box else (False, False, False),
+        angular_velocity=angular,
+        scene_text=SCENE,
+        effects=["gravity", "rotation", "friction"] if angular else ["gravity"],
+        seed=2**63 + 5,  # beyond int64: stored unsigned
+        version="0.1.0",
+        log_events=events,
+        creator_args="hsgran run scene.toml -o out.h5",
+    )
+
+
+def make_blocks(angular=True, seed=0):
+    """Blocks of frames with random, full-precision values (bit-for-bit checks need them)."""
+    rng = np.random.default_rng(seed)
+    blocks, first = [], 0
+    for size in BLOCKS:
+        step = np.arange(first, first + size, dtype=np.int64)
+        first += size
+        blocks.append(
+            dict(
+                step=step,
+                time=step * 1e-3 + rng.uniform(0, 1e-4, size),  # increasing: jitter < spacing
+                position=rng.normal(size=(size, N, 3)),
+                velocity=rng.normal(size=(size, N, 3)),
+                angular_velocity=rng.normal(size=(size, N, 3)) if angular else None,
+                kinetic_translational=rng.uniform(size=size),
+                kinetic_rotational=rng.uniform(size=size) if angular else None,
+                potential=rng.normal(size=size),
+                dissipated=rng.uniform(size=size),
+            )
+        )
+    return blocks
+
+
+def make_events(size, seed=1, t0=0.0):
+    rng = np.random.default_rng(seed)
+    return dict(
+        time=t0 + np.sort(rng.uniform(0, 1, size)),
+        kind=rng.integers(0, 4, size, dtype=np.int8),
+        i=rng.integers(0, N, size),
+        j=rng.integers(-6, N, size),
+        normal_impulse=rng.uniform(size=size),
+        tangential_impulse=rng.normal(size=size),
+        e_n=rng.uniform(size=size),
+        stage=rng.integers(0, 4, size, dtype=np.int8),
+        regime=rng.integers(0, 3, size, dtype=np.int8),
+    )
+
+
+def concat(blocks, key):
+    return np.concatenate([b[key] for b in blocks])
+
+
+def write_file(path, *, angular=True, events=True, box=True, periodic=(True, False, False)):
+    blocks = make_blocks(angular)
+    event_blocks = [make_events(4, seed=1), make_events(6, seed=2, t0=1.0)]
+    args = writer_args(angular=angular, events=events, box=box, periodic=periodic)
+    with TrajectoryWriter(path, **args) as writer:
+        for block in blocks:
+            writer.append_frames(**block)
+        if events:
+            for block in event_blocks:
+                writer.append_events(**block)
+        writer.set_summary({"events": np.int64(10), "wall_time": 1.5, "e": np.array([1.0, 2.0])})
+    return args, blocks, event_blocks
+
+
+# -- round trip ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("angular", [True, False], ids=["rotation", "no-rotation"])
+def test_round_trip_is_bit_for_bit(tmp_path, angular):
+    path = tmp_path / "run.h5"
+    args, blocks, event_blocks = write_file(path, angular=angular)
+    traj = read_trajectory(path)
+
+    assert isinstance(traj, Trajectory)
+    assert traj.n_frames == sum(BLOCKS)
+    assert traj.n_particles == N
+    for key in ("step", "time", "position", "velocity"):
+        np.testing.assert_array_equal(getattr(traj, key), concat(blocks, key), strict=True)
+    if angular:
+        expected = concat(blocks, "angular_velocity")
+        np.testing.assert_array_equal(traj.angular_velocity, expected, strict=True)
+    else:
+        assert traj.angular_velocity is None
+    names = set(ENERGY_OBSERVABLES) - (set() if angular else {"kinetic_energy_rotational"})
+    assert set(traj.energies) == names
+    for name in names:
+        expected = concat(blocks, ENERGY_OBSERVABLES[name])
+        np.testing.assert_array_equal(traj.energies[name], expected, strict=True)
+
+    np.testing.assert_array_equal(traj.radius, args["radius"], strict=True)
+    np.testing.assert_array_equal(traj.mass, args["mass"], strict=True)
+    np.testing.assert_array_equal(traj.material, args["material"])
+    assert traj.material_names == ["glass", "steel"]
+    np.testing.assert_array_equal(traj.box_lower, args["box_lower"], strict=True)
+    np.testing.assert_array_equal(traj.box_upper, args["box_upper"], strict=True)
+    assert traj.periodic == (True, False, False)
+    assert traj.scene_text == SCENE
+    assert traj.effects == args["effects"]
+    assert traj.seed == 2**63 + 5
+    assert traj.version == "0.1.0"
+    assert traj.creator_args == args["creator_args"]
+    assert traj.summary == {"events": 10, "wall_time": 1.5, "e": [1.0, 2.0]}
+    assert traj.complete is True
+
+    assert set(traj.events) == set(EVENT_FIELDS)
+    for name, (dtype, _unit) in EVENT_FIELDS.items():
+        expected = concat(event_blocks, name).astype(dtype)
+        np.testing.assert_array_equal(traj.events[name], expected, strict=True)
+
+
+def test_without_box_or_events(tmp_path):
+    path = tmp_path / "free.h5"
+    write_file(path, box=False, events=False)
+    traj = read_trajectory(path)
+    assert traj.box_lower is None
+    assert traj.box_upper is None
+    assert traj.periodic == (False, False, False)
+    assert traj.events is None
+    with h5py.File(path, "r") as f:
+        assert "edges" not in f["particles/all/box"]
+        assert "hsgran" not in f  # no event log group at all
+
+
+def test_empty_blocks_and_zero_frames(tmp_path):
+    path = tmp_path / "empty.h5"
+    args = writer_args(angular=False)
+    with TrajectoryWriter(path, **args) as writer:
+        writer.append_frames(
+            step=np.empty(0, np.int64),
+            time=np.empty(0),
+            position=np.empty((0, N, 3)),
+            velocity=np.empty((0, N, 3)),
+            angular_velocity=None,
+            kinetic_translational=np.empty(0),
+            kinetic_rotational=None,
+            potential=np.empty(0),
+            dissipated=np.empty(0),
+        )
+        writer.append_events(**make_events(0))
+        assert writer.n_frames == 0
+    traj = read_trajectory(path)
+    assert traj.position.shape == (0, N, 3)
+    assert traj.events["time"].shape == (0,)
+    assert traj.summary == {}
+    assert traj.complete
+
+
+# -- H5MD structure -----------------------------------------------------------------------------
+
+
+def test_file_has_the_h5md_1_1_structure(tmp_path):
+    path = tmp_path / "run.h5"
+    write_file(path, angular=True)
+    with h5py.File(path, "r") as f:
+        np.testing.assert_array_equal(f["h5md"].attrs["version"], [1, 1])
+        assert f["h5md/author"].attrs["name"] == b"hsgran user"
+        assert f["h5md/creator"].attrs["name"] == b"hsgran"
+        assert f["h5md/creator"].attrs["version"] == b"0.1.0"
+        assert f["h5md/modules/units"].attrs["system"] == "SI"
+
+        particles = f["particles/all"]
+        position = particles["position"]
+        elements = {
+            "particles/all/position": "m",
+            "particles/all/velocity": "m s-1",
+            "particles/all/angular_velocity": "rad s-1",
+            "particles/all/box/edges": "m",
+        }
+        elements.update({f"observables/{name}": "J" for name in ENERGY_OBSERVABLES})
+        assert f["particles/all/velocity/value"] != position["value"]  # the == below means it
+        for name, unit in elements.items():
+            element = f[name]
+            assert set(element) == {"step", "time", "value"}, name
+            # step and time are hard links to one pair of datasets, not copies
+            assert element["step"] == position["step"], name
+            assert element["time"] == position["time"], name
+            value = element["value"]
+            assert value.attrs["unit"] == unit, name
+            assert value.shape[0] == sum(BLOCKS)
+            assert value.maxshape[0] is None
+            assert value.chunks is not None
+            assert value.compression == "lzf"
+            assert value.shuffle
+        assert position["time"].attrs["unit"] == "s"
+        assert position["step"].dtype == np.int64
+        assert position["value"].shape == (sum(BLOCKS), N, 3)
+        assert f["observables/potential_energy/value"].shape == (sum(BLOCKS),)
+        assert particles["box/edges/value"].shape == (sum(BLOCKS), 3)
+        np.testing.assert_array_equal(particles["box/edges/value"][0], [0.2, 0.4, 0.5])
+
+        box = particles["box"]
+        assert box.attrs["dimension"] == 3
+        boundary = box.attrs["boundary"]
+        assert boundary.dtype.kind == "S"  # fixed-length strings, as H5MD asks
+        assert list(boundary) == [b"periodic", b"none", b"none"]
+
+        for name, unit in (("radius", "m"), ("mass", "kg"), ("species", None)):
+            dset = particles[name]
+            assert isinstance(dset, h5py.Dataset)
+            assert dset.shape == (N,)
+            assert dset.attrs.get("unit") == unit
+        assert np.issubdtype(particles["species"].dtype, np.integer)
+
+        params = f["parameters/hsgran"].attrs
+        assert bool(params["complete"]) is True
+        assert params["scene_text"] == SCENE
+        assert list(params["effects"]) == ["gravity", "rotation", "friction"]
+        assert list(params["material_names"]) == ["glass", "steel"]
+        assert json.loads(params["summary"])["events"] == 10
+
+        events = f["hsgran/events"]
+        assert set(events) == set(EVENT_FIELDS)
+        assert events["time"].attrs["unit"] == "s"
+        assert events["normal_impulse"].attrs["unit"] == "kg m s-1"
+        assert all(events[name].maxshape == (None,) for name in EVENT_FIELDS)
+
+
+def test_box_edges_only_when_an_axis_is_periodic(tmp_path):
+    path = tmp_path / "walls.h5"
+    write_file(path, periodic=(False, False, False))
+    with h5py.File(path, "r") as f:
+        assert "edges" not in f["particles/all/box"]
+        assert list(f["particles/all/box"].attrs["boundary"]) == [b"none"] * 3
+    traj = read_trajectory(path)
+    np.testing.assert_array_equal(traj.box_upper, [0.1, 0.2, 0.5])
+
+
+# -- bad files ----------------------------------------------------------------------------------
+
+
+def assert_one_line_input_error(path, fragment):
+    with pytest.raises(InputError) as info:
+        read_trajectory(path)
+    message = str(info.value)
+    assert "\n" not in message
+    assert fragment in message
+    return message
+
+
+def test_missing_file_is_an_input_error(tmp_path):
+    assert_one_line_input_error(tmp_path / "nope.h5", "not found")
+
+
+def test_directory_is_an_input_error(tmp_path):
+    assert_one_line_input_error(tmp_path, "directory")
+
+
+@pytest.mark.parametrize("content", [b"", b"not hdf5 at all\n" * 100], ids=["empty", "text"])
+def test_non_hdf5_file_is_an_input_error(tmp_path, content):
+    path = tmp_path / "scene.toml"
+    path.write_bytes(content)
+    assert_one_line_input_error(path, "not an HDF5 file")
+
+
+def test_foreign_hdf5_file_is_an_input_error(tmp_path):
+    path = tmp_path / "other.h5"
+    with h5py.File(path, "w") as f:
+        f["data"] = np.arange(3)
+    assert_one_line_input_error(path, "not an hsgran trajectory")
+
+
+def test_damaged_trajectory_is_an_input_error(tmp_path):
+    path = tmp_path / "run.h5"
+    write_file(path)
+    with h5py.File(path, "a") as f:
+        del f["particles/all/velocity"]
+    assert_one_line_input_error(path, "velocity")
+
+
+# -- interrupted writers ------------------------------------------------------------------------
+
+
+def test_writer_dropped_without_close_still_reads(tmp_path):
+    path = tmp_path / "dropped.h5"
+    writer = TrajectoryWriter(path, **writer_args())
+    blocks = make_blocks()
+    for block in blocks[:2]:
+        writer.append_frames(**block)
+    del writer
+    gc.collect()
+    traj = read_trajectory(path)
+    assert traj.complete is False
+    assert traj.summary == {}
+    np.testing.assert_array_equal(traj.position, concat(blocks[:2], "position"))
+
+
+def test_writer_killed_with_sigkill_leaves_a_readable_file(tmp_path):
+    path = tmp_path / "killed.h5"
+    child = textwrap.dedent(
+        f"""
+        import sys, time
+        sys.path.insert(0, {os.path.dirname(__file__)!r})
+        from test_h5md import make_blocks, make_events, writer_args
+        from hsgran.io import TrajectoryWriter
+        writer = TrajectoryWriter({str(path)!r}, **writer_args())
+        for block in make_blocks()[:2]:
+            writer.append_frames(**block)
+        writer.append_events(**make_events(4))
+        print("appended", flush=True)
+        time.sleep(60)
+        """
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", child], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    try:
+        ready, _, _ = select.select([proc.stdout], [], [], 60)
+        assert ready, "the writing process never reported its appends"
+        line = proc.stdout.readline()
+        assert line.strip() == "appended", proc.stderr.read()
+        # a running simulation's file can be read while its writer holds it open
+        np.testing.assert_array_equal(read_trajectory(path).step, np.arange(sum(BLOCKS[:2])))
+    finally:
+        proc.kill()  # SIGKILL: no clean-up of any kind runs
+        proc.wait(timeout=10)
+    traj = read_trajectory(path)
+    blocks = make_blocks()
+    assert traj.complete is False
+    np.testing.assert_array_equal(traj.position, concat(blocks[:2], "position"), strict=True)
+    np.testing.assert_array_equal(traj.time, concat(blocks[:2], "time"), strict=True)
+    np.testing.assert_array_equal(traj.events["i"], make_events(4)["i"])
+
+
+def test_half_written_block_is_dropped_whole(tmp_path):
+    # A writer killed inside append_frames has written some values but not step/time.
+    path = tmp_path / "cut.h5"
+    write_file(path)
+    with h5py.File(path, "a") as f:
+        f["particles/all/position/step"].resize(4, axis=0)
+        f["hsgran/events/time"].resize(3, axis=0)
+    traj = read_trajectory(path)
+    assert traj.n_frames == 4
+    assert traj.velocity.shape == (4, N, 3)
+    assert traj.energies["potential_energy"].shape == (4,)
+    assert all(values.shape == (3,) for values in traj.events.values())
+
+
+def test_exception_in_with_block_leaves_file_incomplete(tmp_path):
+    path = tmp_path / "failed.h5"
+    blocks = make_blocks()
+
+    def failing_run():
+        with TrajectoryWriter(path, **writer_args()) as writer:
+            writer.append_frames(**blocks[0])
+            raise RuntimeError("engine failed")
+
+    with pytest.raises(RuntimeError, match="engine failed"):
+        failing_run()
+    traj = read_trajectory(path)
+    assert traj.complete is False
+    assert traj.n_frames == BLOCKS[0]
+
+
+# -- writer checks ------------------------------------------------------------------------------
+
+
+def test_writer_rejects_mismatched_arrays(tmp_path):
+    blocks = make_blocks()
+    with TrajectoryWriter(tmp_path / "w.h5", **writer_args(events=False)) as writer:
+        bad = dict(blocks[0], position=blocks[0]["position"][:, :-1])
+        with pytest.raises(ValueError, match="position"):
+            writer.append_frames(**bad)
+        with pytest.raises(ValueError, match="angular_velocity"):
+            writer.append_frames(**dict(blocks[0], angular_velocity=None))
+        with pytest.raises(ValueError, match="log_events=False"):
+            writer.append_events(**make_events(2))
+        writer.append_frames(**blocks[1])
+        with pytest.raises(ValueError, match="non-decreasing"):
+            writer.append_frames(**blocks[0])
+        assert writer.n_frames == BLOCKS[1]
+    with pytest.raises(ValueError, match="closed"):
+        writer.append_frames(**blocks[2])
+    writer.close()  # a second close does nothing
+
+
+def test_writer_rejects_bad_setup(tmp_path):
+    with pytest.raises(InputError, match="periodic axis needs a box"):
+        TrajectoryWriter(tmp_path / "a.h5", **dict(writer_args(box=False), periodic=(1, 0, 0)))
+    with pytest.raises(ValueError, match="material"):
+        TrajectoryWriter(tmp_path / "b.h5", **dict(writer_args(), material_names=["glass"]))
+    with pytest.raises(InputError, match="cannot create"):
+        TrajectoryWriter(tmp_path / "no" / "such" / "dir.h5", **writer_args())
+
+
+# -- MDAnalysis ---------------------------------------------------------------------------------
+
+
+@pytest.fixture
+def mdanalysis_reads_metres(monkeypatch):
+    """MDAnalysis (2.x) knows no length unit "m": register it, as docs/trajectory-format.md says.
+
+    Its H5MD reader raises RuntimeError for a unit missing from its table even with
+    ``convert_units=False``; the three entries below teach it metres (1 m = 1e10 Å).
+    """
+    mda = pytest.importorskip("MDAnalysis")
+    from MDAnalysis import units
+    from MDAnalysis.coordinates.H5MD import H5MDReader
+
+    monkeypatch.setitem(H5MDReader._unit_translation["length"], "m", "m")
+    monkeypatch.setitem(units.lengthUnit_factor, "m", 1e-10)
+    monkeypatch.setitem(units.unit_types, "m", "length")
+    return mda
+
+
+@pytest.mark.parametrize("convert_units", [False, True], ids=["SI", "angstrom"])
+def test_mdanalysis_reads_the_trajectory(tmp_path, mdanalysis_reads_metres, convert_units):
+    mda = mdanalysis_reads_metres
+    path = tmp_path / "run.h5"
+    write_file(path)
+    traj = read_trajectory(path)
+
+    universe = mda.Universe.empty(N, trajectory=True)
+    universe.load_new(str(path), format="H5MD", convert_units=convert_units)
+    assert universe.trajectory.n_frames == traj.n_frames
+    positions = np.array([ts.positions.copy() for ts in universe.trajectory])
+    times = np.array([ts.time for ts in universe.trajectory])
+    box = universe.trajectory[0].dimensions
+    energy = universe.trajectory[2].data["potential_energy"]
+    scale_length, scale_time = (1e10, 1e12) if convert_units else (1.0, 1.0)  # Å, ps
+
+    # MDAnalysis holds positions in float32
+    if convert_units:
+        np.testing.assert_allclose(positions, traj.position * scale_length, rtol=1e-6)
+    else:
+        np.testing.assert_array_equal(positions, traj.position.astype(np.float32))
+    np.testing.assert_allclose(times, traj.time * scale_time, rtol=1e-12)
+    np.testing.assert_allclose(box[:3], (traj.box_upper - traj.box_lower) * scale_length)
+    np.testing.assert_array_equal(box[3:], [90, 90, 90])
+    assert energy == traj.energies["potential_energy"][2]
+
+
+def test_mdanalysis_sees_no_cell_in_a_walled_box(tmp_path, mdanalysis_reads_metres):
+    path = tmp_path / "walls.h5"
+    write_file(path, periodic=(False, False, False))
+    universe = mdanalysis_reads_metres.Universe.empty(N, trajectory=True)
+    universe.load_new(str(path), format="H5MD")
+    assert universe.dimensions is None
