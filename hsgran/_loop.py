@@ -1,0 +1,372 @@
+"""The compiled event loop (layer 5; used only by :mod:`hsgran.engine`).
+
+One pending event per sphere (Smallenburg 2022), kept in an indexed binary heap together with
+one extra entry, the frame tick (index N). Each sphere's event stores the event counter of its
+partner at prediction time; a popped pair event whose partner has had an event since is stale
+and only makes the owner re-predict (lazy invalidation). Spheres are advanced only when they take
+part in an event (delayed states, DynamO); frames evaluate every sphere's parabola at the frame
+time without touching the stored states, so the output interval never changes the trajectory.
+
+Event kinds: ``EV_PAIR`` (sphere–sphere), ``EV_WALL`` (sphere–plane), ``EV_CELL`` (a sphere
+leaves its cell; periodic wrap), and the frame tick. The collision itself is the kernel of
+:mod:`hsgran.contact.model`, inlined with the scene's effect flags as constants.
+
+Everything here is array-in, array-out; the scalar state lives in ``fsc`` (floats) and ``isc``
+(ints) at the ``F_*``/``I_*`` indices so a run can stop (buffer full, event budget) and continue.
+"""
+
+from __future__ import annotations
+
+import math
+
+from hsgran._jit import njit
+from hsgran.contact.model import REC_E_N, REC_ENERGY_LOST, REC_J_N, REC_J_T, REC_REGIME, REC_STAGE
+from hsgran.contact.model import resolve
+from hsgran.events.grid import insert, neighbour_offsets, remove, slot_of
+from hsgran.events.queue import heap_build, heap_update
+from hsgran.motion import NEVER, face_exit_time, flight_position, pair_contact_time
+from hsgran.motion import plane_contact_time
+
+EV_NONE = 0  #: nothing scheduled
+EV_PAIR = 1  #: sphere–sphere collision
+EV_WALL = 2  #: sphere–plane collision
+EV_CELL = 3  #: sphere leaves its cell
+EV_FRAME = 4  #: output tick (entry N)
+EV_STALE = 5  #: (counter only) popped pair events dropped because the partner changed
+EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale")
+
+# float scalars
+F_T_CUR = 0  #: time of the last popped event [s]
+F_T_END = 1  #: stop before events later than this [s]
+F_FRAME_DT = 2  #: frame interval [s]
+F_DISSIPATED = 3  #: kinetic energy dissipated by collisions so far [J]
+F_SIZE = 4
+# int scalars
+I_SEQ = 0  #: next sequence number (tie-break)
+I_N_FRAMES = 1  #: frames in the buffer
+I_N_LOG = 2  #: event-log entries in the buffer
+I_FRAME_INDEX = 3  #: index of the next frame (its time is index × frame_dt)
+I_N_EVENTS = 4  #: events executed in total
+I_COLLAPSED = 5  #: sphere that triggered the collapse guard, or −1
+I_SIZE = 6
+
+STATUS_DONE = 0  #: reached t_end
+STATUS_FRAMES_FULL = 1  #: the frame buffer is full: flush and call again
+STATUS_LOG_FULL = 2  #: the event-log buffer is full: flush and call again
+STATUS_BUDGET = 3  #: executed the requested number of events (progress report)
+STATUS_COLLAPSE = 4  #: a sphere had too many events without time advancing
+
+#: A sphere whose event happens less than ZERO_TIME_REL × max(1 s, t) after its previous one
+#: made no progress in time: that is double round-off of the clock.
+ZERO_TIME_REL = 4e-16
+#: Consecutive no-progress events of one sphere after which the run stops with an error instead
+#: of looping forever (inelastic collapse or a rounding loop). Legitimate simultaneous events
+#: (a Newton's cradle, a symmetric three-body hit) involve a sphere a handful of times.
+MAX_ZERO_TIME_EVENTS = 1000
+
+
+@njit(inline="always")
+def _state_at(pos, vel, t_loc, j, t, gravity, grav_on):
+    """Position and velocity of sphere j at time t (its stored state is at t_loc[j])."""
+    dt = t - t_loc[j]
+    if grav_on:
+        return (flight_position(pos[j, 0], vel[j, 0], gravity[0], dt),
+                flight_position(pos[j, 1], vel[j, 1], gravity[1], dt),
+                flight_position(pos[j, 2], vel[j, 2], gravity[2], dt),
+                vel[j, 0] + gravity[0] * dt, vel[j, 1] + gravity[1] * dt,
+                vel[j, 2] + gravity[2] * dt)
+    return (pos[j, 0] + vel[j, 0] * dt, pos[j, 1] + vel[j, 1] * dt, pos[j, 2] + vel[j, 2] * dt,
+            vel[j, 0], vel[j, 1], vel[j, 2])
+
+
+@njit(inline="always")
+def _advance(pos, vel, t_loc, j, t, gravity, grav_on):
+    """Move sphere j's stored state along its flight to time t."""
+    x, y, z, u, v, w = _state_at(pos, vel, t_loc, j, t, gravity, grav_on)
+    pos[j, 0] = x
+    pos[j, 1] = y
+    pos[j, 2] = z
+    vel[j, 0] = u
+    vel[j, 1] = v
+    vel[j, 2] = w
+    t_loc[j] = t
+
+
+@njit(inline="always")
+def _min_image(d, k, box_len, periodic):
+    """Nearest periodic image of a separation along axis k. Stored positions stay within one
+    box length of the box (wrapped at every cell exit), so one shift is always enough."""
+    if periodic[k]:
+        half = 0.5 * box_len[k]
+        if d > half:
+            return d - box_len[k]
+        if d < -half:
+            return d + box_len[k]
+    return d
+
+
+@njit(inline="always")
+def _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc, radius, gravity, box_len,
+               periodic, grav_on):
+    xj, yj, zj, uj, vj, wj = _state_at(pos, vel, t_loc, j, t_now, gravity, grav_on)
+    return pair_contact_time(_min_image(xi - xj, 0, box_len, periodic),
+                             _min_image(yi - yj, 1, box_len, periodic),
+                             _min_image(zi - zj, 2, box_len, periodic),
+                             ui - uj, vi - vj, wi - wj, radius[i] + radius[j])
+
+
+@njit(inline="always")
+def _predict(i, t_now, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
+             periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind, ev_partner,
+             ev_pcount, isc, grav_on, use_grid):
+    """Find sphere i's next event after t_now and store it (the heap is updated by the caller)."""
+    xi, yi, zi, ui, vi, wi = _state_at(pos, vel, t_loc, i, t_now, gravity, grav_on)
+    best = NEVER
+    kind = EV_NONE
+    partner = -1
+    if use_grid:
+        xs = (xi, yi, zi)
+        us = (ui, vi, wi)
+        for k in range(3):
+            lo = origin[k] + cell[i, k] * csize[k]
+            tau, side = face_exit_time(xs[k], us[k], gravity[k], lo, lo + csize[k])
+            if tau < best:
+                best = tau
+                kind = EV_CELL
+                partner = 2 * k + (1 if side > 0 else 0)
+    for w in range(planes_p.shape[0]):
+        nx = planes_n[w, 0]
+        ny = planes_n[w, 1]
+        nz = planes_n[w, 2]
+        gap = ((xi - planes_p[w, 0]) * nx + (yi - planes_p[w, 1]) * ny
+               + (zi - planes_p[w, 2]) * nz - radius[i])
+        gn = gravity[0] * nx + gravity[1] * ny + gravity[2] * nz
+        tau = plane_contact_time(gap, ui * nx + vi * ny + wi * nz, gn)
+        if tau < best:
+            best = tau
+            kind = EV_WALL
+            partner = w
+    n = pos.shape[0]
+    if use_grid:
+        # wrapped neighbour coordinates, three per axis (9 modulo operations, not 81)
+        ax0, ax1 = neighbour_offsets(ncell[0])
+        ay0, ay1 = neighbour_offsets(ncell[1])
+        az0, az1 = neighbour_offsets(ncell[2])
+        n1 = ncell[1]
+        n2 = ncell[2]
+        for dx in range(ax0, ax1 + 1):
+            sx = ((cell[i, 0] + dx) % ncell[0]) * n1
+            for dy in range(ay0, ay1 + 1):
+                sxy = (sx + (cell[i, 1] + dy) % n1) * n2
+                for dz in range(az0, az1 + 1):
+                    s = sxy + (cell[i, 2] + dz) % n2
+                    j = head[s]
+                    while j >= 0:
+                        if j != i:
+                            tau = _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc,
+                                             radius, gravity, box_len, periodic, grav_on)
+                            if tau < best:
+                                best = tau
+                                kind = EV_PAIR
+                                partner = j
+                        j = nxt[j]
+    else:
+        for j in range(n):
+            if j != i:
+                tau = _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc, radius,
+                                 gravity, box_len, periodic, grav_on)
+                if tau < best:
+                    best = tau
+                    kind = EV_PAIR
+                    partner = j
+    ev_t[i] = t_now + best
+    ev_kind[i] = kind
+    ev_partner[i] = partner
+    ev_pcount[i] = counter[partner] if kind == EV_PAIR else 0
+    ev_seq[i] = isc[I_SEQ]
+    isc[I_SEQ] += 1
+
+
+
+def build(plasticity, friction, rolling, adhesion, rotation, grav_on, use_grid, log_on):
+    """Compile (init, run_loop) for one combination of flags.
+
+    The flags are free variables of the closures, hence compile-time constants: disabled effects
+    are compiled away. Numba caches one pair of functions per combination on disk.
+
+    Returns:
+        ``init(...)`` predicts every sphere's first event and builds the heap;
+        ``run_loop(...)`` runs events (see its docstring).
+    """
+
+    @njit
+    def init(pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len, periodic,
+             origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind, ev_partner, ev_pcount,
+             heap, where, isc):
+        for i in range(pos.shape[0]):
+            _predict(i, 0.0, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity,
+                     box_len, periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq,
+                     ev_kind, ev_partner, ev_pcount, isc, grav_on, use_grid)
+        heap_build(heap, where, ev_t, ev_seq)
+
+    @njit
+    def run_loop(pos, vel, omg, t_loc, radius, inv_m, inv_i, mat, counter, zstreak,
+                 ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where,
+                 planes_p, planes_n, planes_mat, planes_vel, planes_omg, pair_table,
+                 gravity, box_len, periodic, origin, csize, ncell, cell, head, nxt, prv,
+                 fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i, fsc, isc, counts,
+                 max_events, rec):
+        """Run events until t_end, a full buffer, or ``max_events``; returns a ``STATUS_*`` code.
+
+        Shapes: N spheres, P planes, M materials, F buffered frames, L buffered log entries.
+        ``omg`` is (N, 3) with rotation and (1, 3) otherwise (never read then); likewise ``fr_omg``.
+        ``log_f`` (L, 4) holds (time, J_n, J_t, e_n) and ``log_i`` (L, 5) holds (kind, i, j, stage,
+        regime) of each executed collision; j = −1 − w for a collision with plane w.
+        """
+        n = pos.shape[0]
+        t_end = fsc[F_T_END]
+        executed = 0
+        while True:
+            e = heap[0]
+            t = ev_t[e]
+            if t > t_end or t == NEVER:
+                return STATUS_DONE
+            fsc[F_T_CUR] = t
+            if e == n:
+                # frame tick: sample every sphere's flight at t, leave the stored states alone
+                f = isc[I_N_FRAMES]
+                fr_time[f] = t
+                fr_diss[f] = fsc[F_DISSIPATED]
+                for j in range(n):
+                    x, y, z, u, v, w = _state_at(pos, vel, t_loc, j, t, gravity, grav_on)
+                    fr_pos[f, j, 0] = x
+                    fr_pos[f, j, 1] = y
+                    fr_pos[f, j, 2] = z
+                    fr_vel[f, j, 0] = u
+                    fr_vel[f, j, 1] = v
+                    fr_vel[f, j, 2] = w
+                    if rotation:
+                        fr_omg[f, j, 0] = omg[j, 0]
+                        fr_omg[f, j, 1] = omg[j, 1]
+                        fr_omg[f, j, 2] = omg[j, 2]
+                isc[I_N_FRAMES] = f + 1
+                isc[I_FRAME_INDEX] += 1
+                ev_t[n] = isc[I_FRAME_INDEX] * fsc[F_FRAME_DT]
+                ev_seq[n] = isc[I_SEQ]
+                isc[I_SEQ] += 1
+                heap_update(heap, where, ev_t, ev_seq, n)
+                counts[EV_FRAME] += 1
+                if f + 1 == fr_time.shape[0]:
+                    return STATUS_FRAMES_FULL
+                continue
+
+            i = e
+            kind = ev_kind[i]
+            if kind == EV_PAIR:
+                j = ev_partner[i]
+                if counter[j] != ev_pcount[i]:
+                    # stale: the partner moved on since this was predicted; re-predict the owner
+                    _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity,
+                             box_len, periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq,
+                             ev_kind, ev_partner, ev_pcount, isc, grav_on, use_grid)
+                    heap_update(heap, where, ev_t, ev_seq, i)
+                    counts[EV_STALE] += 1
+                    continue
+                tol = ZERO_TIME_REL * max(1.0, t)
+                for p in (i, j):
+                    if t - t_loc[p] <= tol:
+                        zstreak[p] += 1
+                    else:
+                        zstreak[p] = 0
+                _advance(pos, vel, t_loc, i, t, gravity, grav_on)
+                _advance(pos, vel, t_loc, j, t, gravity, grav_on)
+                dx = _min_image(pos[i, 0] - pos[j, 0], 0, box_len, periodic)
+                dy = _min_image(pos[i, 1] - pos[j, 1], 1, box_len, periodic)
+                dz = _min_image(pos[i, 2] - pos[j, 2], 2, box_len, periodic)
+                dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+                wi = omg[i] if rotation else omg[0]
+                wj = omg[j] if rotation else omg[0]
+                resolve(vel[i], wi, vel[j], wj, dx / dist, dy / dist, dz / dist, inv_m[i], inv_m[j],
+                        inv_i[i], inv_i[j], radius[i], radius[j], 1.0 / radius[i] + 1.0 / radius[j],
+                        pair_table[mat[i], mat[j]], rec, plasticity, friction, rolling, adhesion,
+                        rotation, False)
+                counter[i] += 1
+                counter[j] += 1
+                _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
+                         periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
+                         ev_partner, ev_pcount, isc, grav_on, use_grid)
+                heap_update(heap, where, ev_t, ev_seq, i)
+                _predict(j, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
+                         periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
+                         ev_partner, ev_pcount, isc, grav_on, use_grid)
+                heap_update(heap, where, ev_t, ev_seq, j)
+                other = j
+            elif kind == EV_WALL:
+                w = ev_partner[i]
+                if t - t_loc[i] <= ZERO_TIME_REL * max(1.0, t):
+                    zstreak[i] += 1
+                else:
+                    zstreak[i] = 0
+                _advance(pos, vel, t_loc, i, t, gravity, grav_on)
+                wi = omg[i] if rotation else omg[0]
+                resolve(vel[i], wi, planes_vel[w], planes_omg[w], planes_n[w, 0], planes_n[w, 1],
+                        planes_n[w, 2], inv_m[i], 0.0, inv_i[i], 0.0, radius[i], 0.0,
+                        1.0 / radius[i], pair_table[mat[i], planes_mat[w]], rec, plasticity,
+                        friction, rolling, adhesion, rotation, False)
+                counter[i] += 1
+                _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
+                         periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
+                         ev_partner, ev_pcount, isc, grav_on, use_grid)
+                heap_update(heap, where, ev_t, ev_seq, i)
+                other = -1 - w
+            else:
+                # EV_CELL: move to the neighbouring cell; on a periodic axis wrap the stored state
+                code = ev_partner[i]
+                k = code // 2
+                step = 1 if code % 2 == 1 else -1
+                old = slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell)
+                c = cell[i, k] + step
+                if periodic[k]:
+                    if c >= ncell[k]:
+                        c = 0
+                        pos[i, k] -= box_len[k]
+                    elif c < 0:
+                        c = ncell[k] - 1
+                        pos[i, k] += box_len[k]
+                cell[i, k] = c
+                remove(i, old, head, nxt, prv)
+                insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
+                _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
+                         periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
+                         ev_partner, ev_pcount, isc, grav_on, use_grid)
+                heap_update(heap, where, ev_t, ev_seq, i)
+                counts[EV_CELL] += 1
+                continue
+
+            # a collision was executed (pair or wall)
+            counts[kind] += 1
+            isc[I_N_EVENTS] += 1
+            executed += 1
+            fsc[F_DISSIPATED] += rec[REC_ENERGY_LOST]
+            if zstreak[i] > MAX_ZERO_TIME_EVENTS or (other >= 0 and zstreak[other]
+                                                     > MAX_ZERO_TIME_EVENTS):
+                isc[I_COLLAPSED] = i
+                return STATUS_COLLAPSE
+            if log_on:
+                m = isc[I_N_LOG]
+                log_f[m, 0] = t
+                log_f[m, 1] = rec[REC_J_N]
+                log_f[m, 2] = rec[REC_J_T]
+                log_f[m, 3] = rec[REC_E_N]
+                log_i[m, 0] = kind
+                log_i[m, 1] = i
+                log_i[m, 2] = other
+                log_i[m, 3] = int(rec[REC_STAGE])
+                log_i[m, 4] = int(rec[REC_REGIME])
+                isc[I_N_LOG] = m + 1
+                if m + 1 == log_f.shape[0]:
+                    return STATUS_LOG_FULL
+            if executed >= max_events:
+                return STATUS_BUDGET
+
+    return init, run_loop

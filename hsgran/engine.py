@@ -1,0 +1,333 @@
+"""The simulation: builds the state from a scene and drives the compiled event loop (layer 5).
+
+How a run proceeds (:meth:`Simulation.run`)::
+
+    build state (struct of arrays; angular velocities only with `rotation`)
+    predict every sphere's next event; schedule the frame tick at t = 0; build the heap
+    repeat, in compiled code (hsgran._loop.run_loop):
+        pop the earliest entry
+        frame tick  -> sample every sphere's parabola at that time into the frame buffer
+        stale pair  -> the partner had an event since: re-predict the owner only
+        cell exit   -> move the sphere to its new cell (wrap on periodic axes), re-predict it
+        collision   -> advance the one or two spheres, apply the collision model, bump their
+                       counters, re-predict them
+        stop when the buffer is full, the event budget is spent, or the next event is past t_end
+    between compiled calls: hand full buffers to the observers, update the progress bar
+
+Observers are plain objects with any of ``on_frames(block)``, ``on_events(block)`` and
+``on_finish(summary)``; the engine never imports a writer or a renderer.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from hsgran import _loop as L
+from hsgran.errors import HsgranError
+from hsgran.events.grid import cell_coordinates, insert, plan_grid, slot_of
+from hsgran.impact import SOLID_SPHERE_INERTIA
+
+#: Bytes of frame buffer the engine may hold; frames are handed to observers when it is full.
+FRAME_BUFFER_BYTES = 32 * 2**20
+#: Most frames buffered at once (1000-frame blocks append at ~1e6 frames/s in h5py, DESIGN §4).
+FRAME_BUFFER_MAX = 1000
+#: Event-log entries buffered before they are handed to observers.
+LOG_BUFFER = 1 << 16
+#: Collisions executed per compiled call between progress updates.
+EVENTS_PER_CALL = 200_000
+
+
+class SimulationError(HsgranError):
+    """The run cannot continue (for example inelastic collapse without a remedy)."""
+
+
+@dataclass
+class FrameBlock:
+    """Frames sampled exactly at the frame times (SI units)."""
+
+    step: np.ndarray  #: frame index (F,)
+    time: np.ndarray  #: [s] (F,)
+    position: np.ndarray  #: [m] (F, N, 3)
+    velocity: np.ndarray  #: [m/s] (F, N, 3)
+    angular_velocity: np.ndarray | None  #: [rad/s] (F, N, 3), None without rotation
+    kinetic_translational: np.ndarray  #: Σ ½ m v² [J] (F,)
+    kinetic_rotational: np.ndarray | None  #: Σ ½ I ω² [J] (F,)
+    potential: np.ndarray  #: −Σ m g·x [J] (F,)
+    dissipated: np.ndarray  #: energy dissipated by collisions since t = 0 [J] (F,)
+
+
+@dataclass
+class EventBlock:
+    """Executed collisions (the event log)."""
+
+    time: np.ndarray  #: [s]
+    kind: np.ndarray  #: 1 pair, 2 wall
+    i: np.ndarray  #: sphere index
+    j: np.ndarray  #: partner sphere, or −1 − w for plane w
+    normal_impulse: np.ndarray  #: J_n [N s]
+    tangential_impulse: np.ndarray  #: J_t [N s]
+    e_n: np.ndarray  #: normal restitution [-]
+    stage: np.ndarray  #: normal-model stage code
+    regime: np.ndarray  #: tangential regime code
+
+
+@dataclass
+class RunSummary:
+    """What a run did."""
+
+    events: dict = field(default_factory=dict)  #: counts by kind (pair, wall, cell, frame, stale)
+    simulated_time: float = 0.0  #: [s]
+    wall_time: float = 0.0  #: [s]
+    collisions: int = 0  #: pair + wall events
+    events_per_second: float = 0.0  #: all executed events (collisions and cell crossings) / s
+
+    def lines(self) -> list[str]:
+        """Human-readable summary."""
+        by_kind = ", ".join(f"{k} {v:,}" for k, v in self.events.items() if v)
+        return [f"events: {by_kind or 'none'}",
+                f"simulated time {self.simulated_time:.6g} s, wall time {self.wall_time:.3f} s, "
+                f"{self.events_per_second:,.0f} events/s"]
+
+
+_LOOPS: dict = {}
+
+
+def _compiled(flags):
+    """(init, loop) compiled for one combination of effect and engine flags (memoised)."""
+    if flags not in _LOOPS:
+        _LOOPS[flags] = L.build(*flags)
+    return _LOOPS[flags]
+
+
+class Simulation:
+    """An event-driven run of a :class:`~hsgran.scene.Scene`.
+
+    Args:
+        scene: The validated scene.
+        brute_force: Test every pair instead of using the cell grid (for cross-checks; O(N²)).
+        log_events: Record every collision (see :class:`EventBlock`).
+        frame_buffer: Frames buffered between observer calls (default from
+            :data:`FRAME_BUFFER_BYTES`).
+    """
+
+    def __init__(self, scene, *, brute_force: bool = False, log_events: bool = False,
+                 frame_buffer: int | None = None):
+        self.scene = scene
+        eff = scene.effects
+        n = scene.n
+        self.n = n
+        self.rotation = bool(eff.rotation)
+        self.log_events = bool(log_events)
+        self._flags = (bool(eff.plasticity), bool(eff.friction), bool(eff.rolling_resistance),
+                       bool(eff.adhesion), self.rotation, bool(eff.gravity), not brute_force,
+                       self.log_events)
+        self.gravity = np.ascontiguousarray(scene.gravity, dtype=np.float64)
+        self.pos = np.ascontiguousarray(scene.position, dtype=np.float64).copy()
+        self.vel = np.ascontiguousarray(scene.velocity, dtype=np.float64).copy()
+        self.omg = (np.ascontiguousarray(scene.angular_velocity, dtype=np.float64).copy()
+                    if self.rotation else np.zeros((1, 3)))
+        self.radius = np.ascontiguousarray(scene.radius, dtype=np.float64)
+        self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)
+        self.inv_m = 1.0 / self.mass
+        self.inv_i = 1.0 / (SOLID_SPHERE_INERTIA * self.mass * self.radius**2)
+        self.mat = np.ascontiguousarray(scene.material, dtype=np.int64)
+        self.t_loc = np.zeros(n)
+        self.counter = np.zeros(n, dtype=np.int64)
+        self.zstreak = np.zeros(n, dtype=np.int64)
+        self.pair_table = np.ascontiguousarray(scene.pair_table())
+        planes = list(scene.planes)
+        self.planes_p = np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3)
+        self.planes_n = np.array([p.normal for p in planes], dtype=np.float64).reshape(-1, 3)
+        self.planes_mat = np.array([p.material for p in planes], dtype=np.int64)
+        self.planes_vel = np.zeros((len(planes), 3))
+        self.planes_omg = np.zeros((len(planes), 3))
+        self.periodic = np.array(scene.periodic, dtype=np.bool_)
+        if scene.box_lower is not None:
+            lower = np.asarray(scene.box_lower, dtype=np.float64)
+            upper = np.asarray(scene.box_upper, dtype=np.float64)
+        else:
+            lower = (self.pos - self.radius[:, None]).min(axis=0)
+            upper = (self.pos + self.radius[:, None]).max(axis=0)
+        self.box_len = np.where(self.periodic, upper - lower, 0.0)
+        cell_min = 2.0 * float(self.radius.max())
+        self.origin, self.csize, self.ncell = plan_grid(lower, upper, self.periodic, cell_min, n)
+        if np.any(self.periodic & (self.ncell < 3)):
+            raise SimulationError("a periodic axis needs at least 3 cells of one largest diameter")
+        self.cell = cell_coordinates(self.pos, self.origin, self.csize, self.ncell, self.periodic)
+        self.head = np.full(int(np.prod(self.ncell)), -1, dtype=np.int64)
+        self.nxt = np.full(n, -1, dtype=np.int64)
+        self.prv = np.full(n, -1, dtype=np.int64)
+        for i in range(n):
+            insert(i, slot_of(self.cell[i, 0], self.cell[i, 1], self.cell[i, 2], self.ncell),
+                   self.head, self.nxt, self.prv)
+        # one pending event per sphere, entry n is the frame tick
+        self.ev_t = np.full(n + 1, np.inf)
+        self.ev_seq = np.zeros(n + 1, dtype=np.int64)
+        self.ev_kind = np.zeros(n + 1, dtype=np.int64)
+        self.ev_partner = np.full(n + 1, -1, dtype=np.int64)
+        self.ev_pcount = np.zeros(n + 1, dtype=np.int64)
+        self.heap = np.zeros(n + 1, dtype=np.int64)
+        self.where = np.zeros(n + 1, dtype=np.int64)
+        self.fsc = np.zeros(L.F_SIZE)
+        self.fsc[L.F_FRAME_DT] = scene.frame_interval
+        self.isc = np.zeros(L.I_SIZE, dtype=np.int64)
+        self.isc[L.I_COLLAPSED] = -1
+        self.counts = np.zeros(len(L.EVENT_NAMES), dtype=np.int64)
+        self.rec = np.zeros(32)
+        per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2))
+        nf = frame_buffer or max(1, min(FRAME_BUFFER_MAX, FRAME_BUFFER_BYTES // per_frame))
+        self.fr_time = np.zeros(nf)
+        self.fr_diss = np.zeros(nf)
+        self.fr_pos = np.zeros((nf, n, 3))
+        self.fr_vel = np.zeros((nf, n, 3))
+        self.fr_omg = np.zeros((nf, n, 3)) if self.rotation else np.zeros((1, 1, 3))
+        nl = LOG_BUFFER if self.log_events else 1
+        self.log_f = np.zeros((nl, 4))
+        self.log_i = np.zeros((nl, 5), dtype=np.int64)
+        self._frames_emitted = 0
+        self._init, self._loop = _compiled(self._flags)
+        # the frame tick at t = 0 goes first among simultaneous entries (lowest sequence number)
+        self.ev_t[n] = 0.0
+        self.ev_seq[n] = 0
+        self.isc[L.I_SEQ] = 1
+        self._init(self.pos, self.vel, self.t_loc, self.radius, self.counter, self.planes_p,
+                   self.planes_n, self.gravity, self.box_len, self.periodic, self.origin,
+                   self.csize, self.ncell, self.cell, self.head, self.nxt, self.ev_t, self.ev_seq,
+                   self.ev_kind, self.ev_partner, self.ev_pcount, self.heap, self.where, self.isc)
+
+    @property
+    def time(self) -> float:
+        """Time of the last processed event [s]."""
+        return float(self.fsc[L.F_T_CUR])
+
+    @property
+    def collisions(self) -> int:
+        """Collisions (pair and wall events) executed so far."""
+        return int(self.isc[L.I_N_EVENTS])
+
+    def state_at(self, t: float):
+        """Positions [m] and velocities [m/s] of all spheres at time ``t`` ≥ the last event."""
+        dt = (t - self.t_loc)[:, None]
+        g = self.gravity[None, :]
+        return self.pos + dt * (self.vel + 0.5 * g * dt), self.vel + g * dt
+
+    def _call(self, max_events: int) -> int:
+        return self._loop(
+            self.pos, self.vel, self.omg, self.t_loc, self.radius, self.inv_m, self.inv_i,
+            self.mat, self.counter, self.zstreak, self.ev_t, self.ev_seq, self.ev_kind,
+            self.ev_partner, self.ev_pcount, self.heap, self.where, self.planes_p, self.planes_n,
+            self.planes_mat, self.planes_vel, self.planes_omg, self.pair_table, self.gravity,
+            self.box_len, self.periodic, self.origin, self.csize, self.ncell, self.cell,
+            self.head, self.nxt, self.prv, self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg,
+            self.fr_diss, self.log_f, self.log_i, self.fsc, self.isc, self.counts, max_events,
+            self.rec)
+
+    def _frame_block(self) -> FrameBlock | None:
+        f = int(self.isc[L.I_N_FRAMES])
+        if f == 0:
+            return None
+        pos = self.fr_pos[:f].copy()
+        vel = self.fr_vel[:f].copy()
+        omg = self.fr_omg[:f].copy() if self.rotation else None
+        kin_t = 0.5 * np.einsum("n,fnk,fnk->f", self.mass, vel, vel)
+        kin_r = (0.5 * np.einsum("n,fnk,fnk->f", self.mass * SOLID_SPHERE_INERTIA
+                                 * self.radius**2, omg, omg) if self.rotation else None)
+        pot = -np.einsum("n,fnk,k->f", self.mass, pos, self.gravity)
+        step = np.arange(self._frames_emitted, self._frames_emitted + f, dtype=np.int64)
+        self._frames_emitted += f
+        self.isc[L.I_N_FRAMES] = 0
+        return FrameBlock(step, self.fr_time[:f].copy(), pos, vel, omg, kin_t, kin_r, pot,
+                          self.fr_diss[:f].copy())
+
+    def _event_block(self) -> EventBlock | None:
+        m = int(self.isc[L.I_N_LOG])
+        if m == 0:
+            return None
+        f, i = self.log_f[:m], self.log_i[:m]
+        self.isc[L.I_N_LOG] = 0
+        return EventBlock(f[:, 0].copy(), i[:, 0].astype(np.int8), i[:, 1].copy(),
+                          i[:, 2].copy(), f[:, 1].copy(), f[:, 2].copy(), f[:, 3].copy(),
+                          i[:, 3].astype(np.int8), i[:, 4].astype(np.int8))
+
+    def _flush(self, observers) -> None:
+        frames = self._frame_block()
+        if frames is not None:
+            for ob in observers:
+                if hasattr(ob, "on_frames"):
+                    ob.on_frames(frames)
+        events = self._event_block()
+        if events is not None:
+            for ob in observers:
+                if hasattr(ob, "on_events"):
+                    ob.on_events(events)
+
+    def run(self, until: float | None = None, *, max_collisions: int | None = None,
+            observers=(), progress: bool = False) -> RunSummary:
+        """Run until time ``until`` [s] (default: the scene's duration) or a collision count.
+
+        Args:
+            until: End time [s]; frames are sampled at every multiple of the frame interval up
+                to and including it.
+            max_collisions: Stop after this many more collisions (pair and wall events).
+            observers: Objects with optional ``on_frames``, ``on_events``, ``on_finish``.
+            progress: Show a tqdm progress bar over simulated time.
+
+        Returns:
+            :class:`RunSummary` of this call.
+
+        Raises:
+            SimulationError: the collapse guard stopped the run (see ``hsgran._loop``).
+        """
+        t_end = self.scene.duration if until is None else float(until)
+        self.fsc[L.F_T_END] = t_end
+        counts0 = self.counts.copy()
+        done0 = self.collisions
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=t_end, unit="s(sim)", bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g}"
+                       " s [{elapsed}<{remaining}, {postfix}]")
+        wall0 = time.perf_counter()
+        try:
+            while True:
+                budget = EVENTS_PER_CALL
+                if max_collisions is not None:
+                    budget = min(budget, max_collisions - (self.collisions - done0))
+                    if budget <= 0:
+                        break
+                status = self._call(budget)
+                if status in (L.STATUS_FRAMES_FULL, L.STATUS_LOG_FULL, L.STATUS_DONE):
+                    self._flush(observers)
+                if bar is not None:
+                    bar.n = min(self.time, t_end)
+                    bar.set_postfix_str(f"{self.collisions:,} collisions", refresh=True)
+                if status == L.STATUS_COLLAPSE:
+                    self._flush(observers)
+                    i = int(self.isc[L.I_COLLAPSED])
+                    raise SimulationError(
+                        f"sphere {i} had more than {L.MAX_ZERO_TIME_EVENTS} collisions without "
+                        f"time advancing at t = {self.time:.9g} s (inelastic collapse)")
+                if status == L.STATUS_DONE:
+                    self.fsc[L.F_T_CUR] = max(self.time, t_end)
+                    break
+        finally:
+            if bar is not None:
+                bar.close()
+        wall = time.perf_counter() - wall0
+        self._flush(observers)
+        d = self.counts - counts0
+        names = L.EVENT_NAMES
+        events = {names[k]: int(d[k]) for k in range(1, len(names))}
+        executed = events["pair"] + events["wall"] + events["cell"]
+        summary = RunSummary(events=events, simulated_time=min(self.time, t_end), wall_time=wall,
+                             collisions=events["pair"] + events["wall"],
+                             events_per_second=executed / wall if wall > 0 else math.inf)
+        for ob in observers:
+            if hasattr(ob, "on_finish"):
+                ob.on_finish(summary)
+        return summary

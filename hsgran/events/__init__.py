@@ -1,0 +1,2 @@
+"""Event bookkeeping (layer 3): the priority queue and the cell grid. Knows motion, not
+collision physics."""

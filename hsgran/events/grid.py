@@ -1,0 +1,98 @@
+"""Cell grid: which spheres can meet soon (layer 3).
+
+Space is cut into cells at least one largest diameter wide, so a sphere can only touch spheres in
+its own and the 26 neighbouring cells. Each sphere stores its integer cell coordinates; cells are
+kept as doubly linked lists (``head``, ``nxt``, ``prv``) so moving a sphere costs O(1).
+
+On a periodic axis the cells tile the box exactly and coordinates wrap. On any other axis the
+coordinate is unbounded and the list slot is the coordinate modulo the number of cells (a hashed
+grid): a sphere that leaves the initial region keeps working, it only shares its slot with far
+away spheres that the distance test then rejects.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hsgran._jit import njit
+
+#: Maximum number of cells per axis and in total: the grid never costs more memory than the
+#: particles themselves (a few cells per particle) and never exceeds this many slots.
+MAX_CELLS_PER_PARTICLE = 4
+MAX_CELLS_TOTAL = 1 << 24
+
+
+@njit
+def slot_of(cx, cy, cz, ncell):
+    """List slot of integer cell coordinates (modulo the grid size on every axis)."""
+    return ((cx % ncell[0]) * ncell[1] + (cy % ncell[1])) * ncell[2] + (cz % ncell[2])
+
+
+@njit
+def insert(i, s, head, nxt, prv):
+    """Put sphere ``i`` at the front of the list of slot ``s``."""
+    first = head[s]
+    nxt[i] = first
+    prv[i] = -1
+    if first >= 0:
+        prv[first] = i
+    head[s] = i
+
+
+@njit
+def remove(i, s, head, nxt, prv):
+    """Take sphere ``i`` out of the list of slot ``s``."""
+    a = prv[i]
+    b = nxt[i]
+    if a >= 0:
+        nxt[a] = b
+    else:
+        head[s] = b
+    if b >= 0:
+        prv[b] = a
+
+
+@njit
+def neighbour_offsets(n_axis):
+    """Distinct cell offsets to scan along an axis with ``n_axis`` cells: (first, last)."""
+    if n_axis >= 3:
+        return -1, 1
+    if n_axis == 2:
+        return 0, 1
+    return 0, 0
+
+
+def plan_grid(lower, upper, periodic, cell_min, n_particles):
+    """Choose the grid for a domain.
+
+    Args:
+        lower, upper: Extent to cover [m], (3,) (the box, or the spheres' bounding region).
+        periodic: Per-axis periodic flags; on those axes the cells tile [lower, upper] exactly.
+        cell_min: Smallest allowed cell width [m] (the largest contact distance).
+        n_particles: Number of spheres (bounds the number of cells).
+
+    Returns:
+        (origin (3,), cell size (3,), number of cells (3,) int64).
+    """
+    lower = np.asarray(lower, dtype=np.float64)
+    upper = np.asarray(upper, dtype=np.float64)
+    extent = np.maximum(upper - lower, cell_min)
+    n = np.maximum(np.floor(extent / cell_min), 1).astype(np.int64)
+    budget = min(MAX_CELLS_TOTAL, max(27, MAX_CELLS_PER_PARTICLE * n_particles))
+    while int(np.prod(n)) > budget:
+        k = int(np.argmax(np.where(np.asarray(periodic), 0, n)))
+        if n[k] <= 3 or periodic[k]:
+            k = int(np.argmax(n))
+        n[k] = max(1, n[k] // 2)
+    size = extent / n
+    return lower.copy(), size, n
+
+
+def cell_coordinates(pos, origin, size, ncell, periodic):
+    """Integer cell coordinates of positions (N, 3); wrapped into range on periodic axes."""
+    c = np.floor((pos - origin) / size).astype(np.int64)
+    for k in range(3):
+        if periodic[k]:
+            c[:, k] = np.clip(c[:, k], 0, ncell[k] - 1)
+    return c
+
