@@ -68,7 +68,7 @@ class ImpactResult:
             if isinstance(v, np.ndarray):
                 v = [float(x) for x in v]
             elif isinstance(v, tuple):
-                v = [float(x) for x in v]
+                v = [_json_float(float(x)) for x in v]
             elif isinstance(v, dict):
                 v = {kk: _json_float(vv) for kk, vv in v.items()}
             elif isinstance(v, float):
@@ -115,7 +115,8 @@ def oblique_velocity(speed: float, angle_deg: float) -> np.ndarray:
         InputError: speed ≤ 0 or angle outside [0, 90).
     """
     speed = _positive(speed, "speed")
-    if not (isinstance(angle_deg, (int, float)) and 0.0 <= angle_deg < 90.0):
+    if (isinstance(angle_deg, bool) or not isinstance(angle_deg, (int, float))
+            or not 0.0 <= angle_deg < 90.0):
         raise InputError(f"must be in [0, 90) degrees from the wall normal, got {angle_deg!r}",
                          "angle")
     th = math.radians(angle_deg)
@@ -124,8 +125,15 @@ def oblique_velocity(speed: float, angle_deg: float) -> np.ndarray:
 
 def _check_contact_for(effects: Effects, contact: Contact) -> None:
     if effects.friction and contact.sliding_friction is None:
-        raise InputError("a value is required by the 'friction' effect (none is declared for this"
-                         " pair)", "sliding_friction")
+        raise InputError("a value is required by the 'friction' effect: pass "
+                         "Contact(sliding_friction=...), or switch the effect off",
+                         "sliding_friction")
+
+
+def _check_sphere(material: Material, key: str) -> None:
+    if material.rigid or not math.isfinite(material.density):
+        raise InputError(f"material '{material.name}' is rigid: it can be a wall, not a sphere",
+                         key)
 
 
 def _run(v1, w1, v2, w2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, curv, row, effects,
@@ -189,6 +197,7 @@ def sphere_wall_impact(sphere: Material, wall: Material, radius: float, velocity
     effects = Effects.all() if effects is None else effects
     contact = Contact() if contact is None else contact
     _check_contact_for(effects, contact)
+    _check_sphere(sphere, "sphere")
     radius = _positive(radius, "radius")
     n = _vector(normal, "normal")
     norm = float(np.linalg.norm(n))
@@ -228,6 +237,8 @@ def sphere_sphere_impact(material1: Material, material2: Material, radius1: floa
     effects = Effects.all() if effects is None else effects
     contact = Contact() if contact is None else contact
     _check_contact_for(effects, contact)
+    _check_sphere(material1, "material1")
+    _check_sphere(material2, "material2")
     r1 = _positive(radius1, "radius1")
     r2 = _positive(radius2, "radius2")
     n = _vector(normal, "normal")
