@@ -118,22 +118,21 @@ def _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc, radius, gra
 @njit(inline="always")
 def _predict(i, t_now, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
              periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind, ev_partner,
-             ev_pcount, isc, grav_on, use_grid):
+             ev_pcount, isc, grav_on):
     """Find sphere i's next event after t_now and store it (the heap is updated by the caller)."""
     xi, yi, zi, ui, vi, wi = _state_at(pos, vel, t_loc, i, t_now, gravity, grav_on)
     best = NEVER
     kind = EV_NONE
     partner = -1
-    if use_grid:
-        xs = (xi, yi, zi)
-        us = (ui, vi, wi)
-        for k in range(3):
-            lo = origin[k] + cell[i, k] * csize[k]
-            tau, side = face_exit_time(xs[k], us[k], gravity[k], lo, lo + csize[k])
-            if tau < best:
-                best = tau
-                kind = EV_CELL
-                partner = 2 * k + (1 if side > 0 else 0)
+    xs = (xi, yi, zi)
+    us = (ui, vi, wi)
+    for k in range(3):
+        lo = origin[k] + cell[i, k] * csize[k]
+        tau, side = face_exit_time(xs[k], us[k], gravity[k], lo, lo + csize[k])
+        if tau < best:
+            best = tau
+            kind = EV_CELL
+            partner = 2 * k + (1 if side > 0 else 0)
     for w in range(planes_p.shape[0]):
         nx = planes_n[w, 0]
         ny = planes_n[w, 1]
@@ -146,39 +145,28 @@ def _predict(i, t_now, pos, vel, t_loc, radius, counter, planes_p, planes_n, gra
             best = tau
             kind = EV_WALL
             partner = w
-    n = pos.shape[0]
-    if use_grid:
-        # wrapped neighbour coordinates, three per axis (9 modulo operations, not 81)
-        ax0, ax1 = neighbour_offsets(ncell[0])
-        ay0, ay1 = neighbour_offsets(ncell[1])
-        az0, az1 = neighbour_offsets(ncell[2])
-        n1 = ncell[1]
-        n2 = ncell[2]
-        for dx in range(ax0, ax1 + 1):
-            sx = ((cell[i, 0] + dx) % ncell[0]) * n1
-            for dy in range(ay0, ay1 + 1):
-                sxy = (sx + (cell[i, 1] + dy) % n1) * n2
-                for dz in range(az0, az1 + 1):
-                    s = sxy + (cell[i, 2] + dz) % n2
-                    j = head[s]
-                    while j >= 0:
-                        if j != i:
-                            tau = _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc,
-                                             radius, gravity, box_len, periodic, grav_on)
-                            if tau < best:
-                                best = tau
-                                kind = EV_PAIR
-                                partner = j
-                        j = nxt[j]
-    else:
-        for j in range(n):
-            if j != i:
-                tau = _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc, radius,
-                                 gravity, box_len, periodic, grav_on)
-                if tau < best:
-                    best = tau
-                    kind = EV_PAIR
-                    partner = j
+    # wrapped neighbour coordinates, three per axis (9 modulo operations, not 81)
+    ax0, ax1 = neighbour_offsets(ncell[0])
+    ay0, ay1 = neighbour_offsets(ncell[1])
+    az0, az1 = neighbour_offsets(ncell[2])
+    n1 = ncell[1]
+    n2 = ncell[2]
+    for dx in range(ax0, ax1 + 1):
+        sx = ((cell[i, 0] + dx) % ncell[0]) * n1
+        for dy in range(ay0, ay1 + 1):
+            sxy = (sx + (cell[i, 1] + dy) % n1) * n2
+            for dz in range(az0, az1 + 1):
+                s = sxy + (cell[i, 2] + dz) % n2
+                j = head[s]
+                while j >= 0:
+                    if j != i:
+                        tau = _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc,
+                                         radius, gravity, box_len, periodic, grav_on)
+                        if tau < best:
+                            best = tau
+                            kind = EV_PAIR
+                            partner = j
+                    j = nxt[j]
     ev_t[i] = t_now + best
     ev_kind[i] = kind
     ev_partner[i] = partner
@@ -188,7 +176,7 @@ def _predict(i, t_now, pos, vel, t_loc, radius, counter, planes_p, planes_n, gra
 
 
 
-def build(plasticity, friction, rolling, adhesion, rotation, grav_on, use_grid, log_on):
+def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
     """Compile (init, run_loop) for one combination of flags.
 
     The flags are free variables of the closures, hence compile-time constants: disabled effects
@@ -206,7 +194,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, use_grid, 
         for i in range(pos.shape[0]):
             _predict(i, 0.0, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity,
                      box_len, periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq,
-                     ev_kind, ev_partner, ev_pcount, isc, grav_on, use_grid)
+                     ev_kind, ev_partner, ev_pcount, isc, grav_on)
         heap_build(heap, where, ev_t, ev_seq)
 
     @njit
@@ -268,7 +256,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, use_grid, 
                     # stale: the partner moved on since this was predicted; re-predict the owner
                     _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity,
                              box_len, periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq,
-                             ev_kind, ev_partner, ev_pcount, isc, grav_on, use_grid)
+                             ev_kind, ev_partner, ev_pcount, isc, grav_on)
                     heap_update(heap, where, ev_t, ev_seq, i)
                     counts[EV_STALE] += 1
                     continue
@@ -294,11 +282,11 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, use_grid, 
                 counter[j] += 1
                 _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
                          periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
-                         ev_partner, ev_pcount, isc, grav_on, use_grid)
+                         ev_partner, ev_pcount, isc, grav_on)
                 heap_update(heap, where, ev_t, ev_seq, i)
                 _predict(j, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
                          periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
-                         ev_partner, ev_pcount, isc, grav_on, use_grid)
+                         ev_partner, ev_pcount, isc, grav_on)
                 heap_update(heap, where, ev_t, ev_seq, j)
                 other = j
             elif kind == EV_WALL:
@@ -316,7 +304,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, use_grid, 
                 counter[i] += 1
                 _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
                          periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
-                         ev_partner, ev_pcount, isc, grav_on, use_grid)
+                         ev_partner, ev_pcount, isc, grav_on)
                 heap_update(heap, where, ev_t, ev_seq, i)
                 other = -1 - w
             else:
@@ -338,7 +326,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, use_grid, 
                 insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
                 _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
                          periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
-                         ev_partner, ev_pcount, isc, grav_on, use_grid)
+                         ev_partner, ev_pcount, isc, grav_on)
                 heap_update(heap, where, ev_t, ev_seq, i)
                 counts[EV_CELL] += 1
                 continue

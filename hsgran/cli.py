@@ -471,11 +471,48 @@ def _impact_table(result: ImpactResult, inputs: dict, derived: dict, effects: Ef
     return f"{head}\n\n{_table(rows)}\n\n{RECONSTRUCTION_LINE}"
 
 
+# ---- run ---------------------------------------------------------------------------------
+
+def _add_run_parser(sub) -> None:
+    p = sub.add_parser(
+        "run", help="run a scene file and write its trajectory (HDF5, H5MD 1.1)",
+        description="Run a scene (TOML) with the event-driven engine and write an HDF5 "
+                    "trajectory following H5MD 1.1 (layout: docs/trajectory-format.md). "
+                    "Prints a summary: events by kind, simulated time, wall time, events/s.")
+    p.add_argument("scene", metavar="SCENE.toml", help="scene file")
+    p.add_argument("-o", "--output", metavar="OUT.h5", help="trajectory file to write")
+    p.add_argument("--until", metavar="T", help="end time [s] (default: the scene's duration)")
+    p.add_argument("--events", action="store_true", help="record every collision in the file")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def cmd_run(args: argparse.Namespace) -> int:
+    """``hsgran run``: run a scene and write its trajectory."""
+    from hsgran.api import run_scene
+    from hsgran.engine import SimulationError
+
+    until = None if args.until is None else _positive(args.until, "--until")
+    try:
+        summary = run_scene(args.scene, args.output, until=until, log_events=args.events,
+                            progress=not args.no_progress, force=args.force,
+                            creator_args=" ".join(sys.argv))
+    except SimulationError as exc:
+        print(f"{PROG}: simulation stopped: {_one_line(exc)}", file=sys.stderr)
+        return 1
+    for line in summary.lines():
+        print(line)
+    if args.output:
+        print(f"trajectory: {args.output}")
+    return 0
+
+
 # ---- main --------------------------------------------------------------------------------
 
 #: Handler of each subcommand: takes the parsed arguments, returns the exit code.
 HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "impact": cmd_impact,
+    "run": cmd_run,
 }
 
 
@@ -488,6 +525,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"{PROG} {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     _add_impact_parser(sub)
+    _add_run_parser(sub)
     parser.commands = dict(sub.choices)
     return parser
 

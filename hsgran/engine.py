@@ -108,7 +108,8 @@ class Simulation:
 
     Args:
         scene: The validated scene.
-        brute_force: Test every pair instead of using the cell grid (for cross-checks; O(N²)).
+        brute_force: Test every pair instead of using the cell grid (for cross-checks; O(N²)):
+            the grid then has one cell per axis, which holds every sphere.
         log_events: Record every collision (see :class:`EventBlock`).
         frame_buffer: Frames buffered between observer calls (default from
             :data:`FRAME_BUFFER_BYTES`).
@@ -123,8 +124,7 @@ class Simulation:
         self.rotation = bool(eff.rotation)
         self.log_events = bool(log_events)
         self._flags = (bool(eff.plasticity), bool(eff.friction), bool(eff.rolling_resistance),
-                       bool(eff.adhesion), self.rotation, bool(eff.gravity), not brute_force,
-                       self.log_events)
+                       bool(eff.adhesion), self.rotation, bool(eff.gravity), self.log_events)
         self.gravity = np.ascontiguousarray(scene.gravity, dtype=np.float64)
         self.pos = np.ascontiguousarray(scene.position, dtype=np.float64).copy()
         self.vel = np.ascontiguousarray(scene.velocity, dtype=np.float64).copy()
@@ -155,7 +155,10 @@ class Simulation:
         self.box_len = np.where(self.periodic, upper - lower, 0.0)
         cell_min = 2.0 * float(self.radius.max())
         self.origin, self.csize, self.ncell = plan_grid(lower, upper, self.periodic, cell_min, n)
-        if np.any(self.periodic & (self.ncell < 3)):
+        if brute_force:
+            self.csize = self.csize * self.ncell
+            self.ncell = np.ones(3, dtype=np.int64)
+        elif np.any(self.periodic & (self.ncell < 3)):
             raise SimulationError("a periodic axis needs at least 3 cells of one largest diameter")
         self.cell = cell_coordinates(self.pos, self.origin, self.csize, self.ncell, self.periodic)
         self.head = np.full(int(np.prod(self.ncell)), -1, dtype=np.int64)
@@ -198,6 +201,11 @@ class Simulation:
                    self.planes_n, self.gravity, self.box_len, self.periodic, self.origin,
                    self.csize, self.ncell, self.cell, self.head, self.nxt, self.ev_t, self.ev_seq,
                    self.ev_kind, self.ev_partner, self.ev_pcount, self.heap, self.where, self.isc)
+
+        # compile (or load from the cache) now, so run() times only the run: with t_end < 0
+        # the loop returns before touching any event
+        self.fsc[L.F_T_END] = -1.0
+        self._call(1)
 
     @property
     def time(self) -> float:

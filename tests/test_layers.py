@@ -30,6 +30,7 @@ LAYERS = {
     "plot": 6,
     "validate": 6,
     "cli": 6,
+    "api": 6,
     "__main__": 6,
 }
 
