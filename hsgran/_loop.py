@@ -20,12 +20,24 @@ from __future__ import annotations
 import math
 
 from hsgran._jit import njit
-from hsgran.contact.model import REC_E_N, REC_ENERGY_LOST, REC_J_N, REC_J_T, REC_REGIME, REC_STAGE
-from hsgran.contact.model import resolve
+from hsgran.contact.model import (
+    REC_E_N,
+    REC_ENERGY_LOST,
+    REC_J_N,
+    REC_J_T,
+    REC_REGIME,
+    REC_STAGE,
+    resolve,
+)
 from hsgran.events.grid import insert, neighbour_offsets, remove, slot_of
 from hsgran.events.queue import heap_build, heap_update
-from hsgran.motion import NEVER, face_exit_time, flight_position, pair_contact_time
-from hsgran.motion import plane_contact_time
+from hsgran.motion import (
+    NEVER,
+    face_exit_time,
+    flight_position,
+    pair_contact_time,
+    plane_contact_time,
+)
 
 EV_NONE = 0  #: nothing scheduled
 EV_PAIR = 1  #: sphere–sphere collision
@@ -70,13 +82,22 @@ def _state_at(pos, vel, t_loc, j, t, gravity, grav_on):
     """Position and velocity of sphere j at time t (its stored state is at t_loc[j])."""
     dt = t - t_loc[j]
     if grav_on:
-        return (flight_position(pos[j, 0], vel[j, 0], gravity[0], dt),
-                flight_position(pos[j, 1], vel[j, 1], gravity[1], dt),
-                flight_position(pos[j, 2], vel[j, 2], gravity[2], dt),
-                vel[j, 0] + gravity[0] * dt, vel[j, 1] + gravity[1] * dt,
-                vel[j, 2] + gravity[2] * dt)
-    return (pos[j, 0] + vel[j, 0] * dt, pos[j, 1] + vel[j, 1] * dt, pos[j, 2] + vel[j, 2] * dt,
-            vel[j, 0], vel[j, 1], vel[j, 2])
+        return (
+            flight_position(pos[j, 0], vel[j, 0], gravity[0], dt),
+            flight_position(pos[j, 1], vel[j, 1], gravity[1], dt),
+            flight_position(pos[j, 2], vel[j, 2], gravity[2], dt),
+            vel[j, 0] + gravity[0] * dt,
+            vel[j, 1] + gravity[1] * dt,
+            vel[j, 2] + gravity[2] * dt,
+        )
+    return (
+        pos[j, 0] + vel[j, 0] * dt,
+        pos[j, 1] + vel[j, 1] * dt,
+        pos[j, 2] + vel[j, 2] * dt,
+        vel[j, 0],
+        vel[j, 1],
+        vel[j, 2],
+    )
 
 
 @njit(inline="always")
@@ -106,19 +127,65 @@ def _min_image(d, k, box_len, periodic):
 
 
 @njit(inline="always")
-def _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc, radius, gravity, box_len,
-               periodic, grav_on):
+def _pair_time(
+    i,
+    j,
+    xi,
+    yi,
+    zi,
+    ui,
+    vi,
+    wi,
+    t_now,
+    pos,
+    vel,
+    t_loc,
+    radius,
+    gravity,
+    box_len,
+    periodic,
+    grav_on,
+):
     xj, yj, zj, uj, vj, wj = _state_at(pos, vel, t_loc, j, t_now, gravity, grav_on)
-    return pair_contact_time(_min_image(xi - xj, 0, box_len, periodic),
-                             _min_image(yi - yj, 1, box_len, periodic),
-                             _min_image(zi - zj, 2, box_len, periodic),
-                             ui - uj, vi - vj, wi - wj, radius[i] + radius[j])
+    return pair_contact_time(
+        _min_image(xi - xj, 0, box_len, periodic),
+        _min_image(yi - yj, 1, box_len, periodic),
+        _min_image(zi - zj, 2, box_len, periodic),
+        ui - uj,
+        vi - vj,
+        wi - wj,
+        radius[i] + radius[j],
+    )
 
 
 @njit(inline="always")
-def _predict(i, t_now, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
-             periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind, ev_partner,
-             ev_pcount, isc, grav_on):
+def _predict(
+    i,
+    t_now,
+    pos,
+    vel,
+    t_loc,
+    radius,
+    counter,
+    planes_p,
+    planes_n,
+    gravity,
+    box_len,
+    periodic,
+    origin,
+    csize,
+    ncell,
+    cell,
+    head,
+    nxt,
+    ev_t,
+    ev_seq,
+    ev_kind,
+    ev_partner,
+    ev_pcount,
+    isc,
+    grav_on,
+):
     """Find sphere i's next event after t_now and store it (the heap is updated by the caller)."""
     xi, yi, zi, ui, vi, wi = _state_at(pos, vel, t_loc, i, t_now, gravity, grav_on)
     best = NEVER
@@ -137,8 +204,12 @@ def _predict(i, t_now, pos, vel, t_loc, radius, counter, planes_p, planes_n, gra
         nx = planes_n[w, 0]
         ny = planes_n[w, 1]
         nz = planes_n[w, 2]
-        gap = ((xi - planes_p[w, 0]) * nx + (yi - planes_p[w, 1]) * ny
-               + (zi - planes_p[w, 2]) * nz - radius[i])
+        gap = (
+            (xi - planes_p[w, 0]) * nx
+            + (yi - planes_p[w, 1]) * ny
+            + (zi - planes_p[w, 2]) * nz
+            - radius[i]
+        )
         gn = gravity[0] * nx + gravity[1] * ny + gravity[2] * nz
         tau = plane_contact_time(gap, ui * nx + vi * ny + wi * nz, gn)
         if tau < best:
@@ -160,8 +231,25 @@ def _predict(i, t_now, pos, vel, t_loc, radius, counter, planes_p, planes_n, gra
                 j = head[s]
                 while j >= 0:
                     if j != i:
-                        tau = _pair_time(i, j, xi, yi, zi, ui, vi, wi, t_now, pos, vel, t_loc,
-                                         radius, gravity, box_len, periodic, grav_on)
+                        tau = _pair_time(
+                            i,
+                            j,
+                            xi,
+                            yi,
+                            zi,
+                            ui,
+                            vi,
+                            wi,
+                            t_now,
+                            pos,
+                            vel,
+                            t_loc,
+                            radius,
+                            gravity,
+                            box_len,
+                            periodic,
+                            grav_on,
+                        )
                         if tau < best:
                             best = tau
                             kind = EV_PAIR
@@ -173,7 +261,6 @@ def _predict(i, t_now, pos, vel, t_loc, radius, counter, planes_p, planes_n, gra
     ev_pcount[i] = counter[partner] if kind == EV_PAIR else 0
     ev_seq[i] = isc[I_SEQ]
     isc[I_SEQ] += 1
-
 
 
 def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
@@ -188,22 +275,110 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
     """
 
     @njit
-    def init(pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len, periodic,
-             origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind, ev_partner, ev_pcount,
-             heap, where, isc):
+    def init(
+        pos,
+        vel,
+        t_loc,
+        radius,
+        counter,
+        planes_p,
+        planes_n,
+        gravity,
+        box_len,
+        periodic,
+        origin,
+        csize,
+        ncell,
+        cell,
+        head,
+        nxt,
+        ev_t,
+        ev_seq,
+        ev_kind,
+        ev_partner,
+        ev_pcount,
+        heap,
+        where,
+        isc,
+    ):
         for i in range(pos.shape[0]):
-            _predict(i, 0.0, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity,
-                     box_len, periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq,
-                     ev_kind, ev_partner, ev_pcount, isc, grav_on)
+            _predict(
+                i,
+                0.0,
+                pos,
+                vel,
+                t_loc,
+                radius,
+                counter,
+                planes_p,
+                planes_n,
+                gravity,
+                box_len,
+                periodic,
+                origin,
+                csize,
+                ncell,
+                cell,
+                head,
+                nxt,
+                ev_t,
+                ev_seq,
+                ev_kind,
+                ev_partner,
+                ev_pcount,
+                isc,
+                grav_on,
+            )
         heap_build(heap, where, ev_t, ev_seq)
 
     @njit
-    def run_loop(pos, vel, omg, t_loc, radius, inv_m, inv_i, mat, counter, zstreak,
-                 ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where,
-                 planes_p, planes_n, planes_mat, planes_vel, planes_omg, pair_table,
-                 gravity, box_len, periodic, origin, csize, ncell, cell, head, nxt, prv,
-                 fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i, fsc, isc, counts,
-                 max_events, rec):
+    def run_loop(
+        pos,
+        vel,
+        omg,
+        t_loc,
+        radius,
+        inv_m,
+        inv_i,
+        mat,
+        counter,
+        zstreak,
+        ev_t,
+        ev_seq,
+        ev_kind,
+        ev_partner,
+        ev_pcount,
+        heap,
+        where,
+        planes_p,
+        planes_n,
+        planes_mat,
+        planes_vel,
+        planes_omg,
+        pair_table,
+        gravity,
+        box_len,
+        periodic,
+        origin,
+        csize,
+        ncell,
+        cell,
+        head,
+        nxt,
+        prv,
+        fr_time,
+        fr_pos,
+        fr_vel,
+        fr_omg,
+        fr_diss,
+        log_f,
+        log_i,
+        fsc,
+        isc,
+        counts,
+        max_events,
+        rec,
+    ):
         """Run events until t_end, a full buffer, or ``max_events``; returns a ``STATUS_*`` code.
 
         Shapes: N spheres, P planes, M materials, F buffered frames, L buffered log entries.
@@ -254,9 +429,33 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 j = ev_partner[i]
                 if counter[j] != ev_pcount[i]:
                     # stale: the partner moved on since this was predicted; re-predict the owner
-                    _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity,
-                             box_len, periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq,
-                             ev_kind, ev_partner, ev_pcount, isc, grav_on)
+                    _predict(
+                        i,
+                        t,
+                        pos,
+                        vel,
+                        t_loc,
+                        radius,
+                        counter,
+                        planes_p,
+                        planes_n,
+                        gravity,
+                        box_len,
+                        periodic,
+                        origin,
+                        csize,
+                        ncell,
+                        cell,
+                        head,
+                        nxt,
+                        ev_t,
+                        ev_seq,
+                        ev_kind,
+                        ev_partner,
+                        ev_pcount,
+                        isc,
+                        grav_on,
+                    )
                     heap_update(heap, where, ev_t, ev_seq, i)
                     counts[EV_STALE] += 1
                     continue
@@ -274,19 +473,87 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 dist = math.sqrt(dx * dx + dy * dy + dz * dz)
                 wi = omg[i] if rotation else omg[0]
                 wj = omg[j] if rotation else omg[0]
-                resolve(vel[i], wi, vel[j], wj, dx / dist, dy / dist, dz / dist, inv_m[i], inv_m[j],
-                        inv_i[i], inv_i[j], radius[i], radius[j], 1.0 / radius[i] + 1.0 / radius[j],
-                        pair_table[mat[i], mat[j]], rec, plasticity, friction, rolling, adhesion,
-                        rotation, False)
+                resolve(
+                    vel[i],
+                    wi,
+                    vel[j],
+                    wj,
+                    dx / dist,
+                    dy / dist,
+                    dz / dist,
+                    inv_m[i],
+                    inv_m[j],
+                    inv_i[i],
+                    inv_i[j],
+                    radius[i],
+                    radius[j],
+                    1.0 / radius[i] + 1.0 / radius[j],
+                    pair_table[mat[i], mat[j]],
+                    rec,
+                    plasticity,
+                    friction,
+                    rolling,
+                    adhesion,
+                    rotation,
+                    False,
+                )
                 counter[i] += 1
                 counter[j] += 1
-                _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
-                         periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
-                         ev_partner, ev_pcount, isc, grav_on)
+                _predict(
+                    i,
+                    t,
+                    pos,
+                    vel,
+                    t_loc,
+                    radius,
+                    counter,
+                    planes_p,
+                    planes_n,
+                    gravity,
+                    box_len,
+                    periodic,
+                    origin,
+                    csize,
+                    ncell,
+                    cell,
+                    head,
+                    nxt,
+                    ev_t,
+                    ev_seq,
+                    ev_kind,
+                    ev_partner,
+                    ev_pcount,
+                    isc,
+                    grav_on,
+                )
                 heap_update(heap, where, ev_t, ev_seq, i)
-                _predict(j, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
-                         periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
-                         ev_partner, ev_pcount, isc, grav_on)
+                _predict(
+                    j,
+                    t,
+                    pos,
+                    vel,
+                    t_loc,
+                    radius,
+                    counter,
+                    planes_p,
+                    planes_n,
+                    gravity,
+                    box_len,
+                    periodic,
+                    origin,
+                    csize,
+                    ncell,
+                    cell,
+                    head,
+                    nxt,
+                    ev_t,
+                    ev_seq,
+                    ev_kind,
+                    ev_partner,
+                    ev_pcount,
+                    isc,
+                    grav_on,
+                )
                 heap_update(heap, where, ev_t, ev_seq, j)
                 other = j
             elif kind == EV_WALL:
@@ -297,14 +564,58 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                     zstreak[i] = 0
                 _advance(pos, vel, t_loc, i, t, gravity, grav_on)
                 wi = omg[i] if rotation else omg[0]
-                resolve(vel[i], wi, planes_vel[w], planes_omg[w], planes_n[w, 0], planes_n[w, 1],
-                        planes_n[w, 2], inv_m[i], 0.0, inv_i[i], 0.0, radius[i], 0.0,
-                        1.0 / radius[i], pair_table[mat[i], planes_mat[w]], rec, plasticity,
-                        friction, rolling, adhesion, rotation, False)
+                resolve(
+                    vel[i],
+                    wi,
+                    planes_vel[w],
+                    planes_omg[w],
+                    planes_n[w, 0],
+                    planes_n[w, 1],
+                    planes_n[w, 2],
+                    inv_m[i],
+                    0.0,
+                    inv_i[i],
+                    0.0,
+                    radius[i],
+                    0.0,
+                    1.0 / radius[i],
+                    pair_table[mat[i], planes_mat[w]],
+                    rec,
+                    plasticity,
+                    friction,
+                    rolling,
+                    adhesion,
+                    rotation,
+                    False,
+                )
                 counter[i] += 1
-                _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
-                         periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
-                         ev_partner, ev_pcount, isc, grav_on)
+                _predict(
+                    i,
+                    t,
+                    pos,
+                    vel,
+                    t_loc,
+                    radius,
+                    counter,
+                    planes_p,
+                    planes_n,
+                    gravity,
+                    box_len,
+                    periodic,
+                    origin,
+                    csize,
+                    ncell,
+                    cell,
+                    head,
+                    nxt,
+                    ev_t,
+                    ev_seq,
+                    ev_kind,
+                    ev_partner,
+                    ev_pcount,
+                    isc,
+                    grav_on,
+                )
                 heap_update(heap, where, ev_t, ev_seq, i)
                 other = -1 - w
             else:
@@ -324,9 +635,33 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 cell[i, k] = c
                 remove(i, old, head, nxt, prv)
                 insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
-                _predict(i, t, pos, vel, t_loc, radius, counter, planes_p, planes_n, gravity, box_len,
-                         periodic, origin, csize, ncell, cell, head, nxt, ev_t, ev_seq, ev_kind,
-                         ev_partner, ev_pcount, isc, grav_on)
+                _predict(
+                    i,
+                    t,
+                    pos,
+                    vel,
+                    t_loc,
+                    radius,
+                    counter,
+                    planes_p,
+                    planes_n,
+                    gravity,
+                    box_len,
+                    periodic,
+                    origin,
+                    csize,
+                    ncell,
+                    cell,
+                    head,
+                    nxt,
+                    ev_t,
+                    ev_seq,
+                    ev_kind,
+                    ev_partner,
+                    ev_pcount,
+                    isc,
+                    grav_on,
+                )
                 heap_update(heap, where, ev_t, ev_seq, i)
                 counts[EV_CELL] += 1
                 continue
@@ -336,8 +671,9 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
             isc[I_N_EVENTS] += 1
             executed += 1
             fsc[F_DISSIPATED] += rec[REC_ENERGY_LOST]
-            if zstreak[i] > MAX_ZERO_TIME_EVENTS or (other >= 0 and zstreak[other]
-                                                     > MAX_ZERO_TIME_EVENTS):
+            if zstreak[i] > MAX_ZERO_TIME_EVENTS or (
+                other >= 0 and zstreak[other] > MAX_ZERO_TIME_EVENTS
+            ):
                 isc[I_COLLAPSED] = i
                 return STATUS_COLLAPSE
             if log_on:

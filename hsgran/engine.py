@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hsgran import _loop as L
+from hsgran import _loop as ev
 from hsgran.errors import HsgranError
 from hsgran.events.grid import cell_coordinates, insert, plan_grid, slot_of
 from hsgran.impact import SOLID_SPHERE_INERTIA
@@ -99,7 +99,7 @@ _LOOPS: dict = {}
 def _compiled(flags):
     """(init, loop) compiled for one combination of effect and engine flags (memoised)."""
     if flags not in _LOOPS:
-        _LOOPS[flags] = L.build(*flags)
+        _LOOPS[flags] = ev.build(*flags)
     return _LOOPS[flags]
 
 
@@ -175,11 +175,11 @@ class Simulation:
         self.ev_pcount = np.zeros(n + 1, dtype=np.int64)
         self.heap = np.zeros(n + 1, dtype=np.int64)
         self.where = np.zeros(n + 1, dtype=np.int64)
-        self.fsc = np.zeros(L.F_SIZE)
-        self.fsc[L.F_FRAME_DT] = scene.frame_interval
-        self.isc = np.zeros(L.I_SIZE, dtype=np.int64)
-        self.isc[L.I_COLLAPSED] = -1
-        self.counts = np.zeros(len(L.EVENT_NAMES), dtype=np.int64)
+        self.fsc = np.zeros(ev.F_SIZE)
+        self.fsc[ev.F_FRAME_DT] = scene.frame_interval
+        self.isc = np.zeros(ev.I_SIZE, dtype=np.int64)
+        self.isc[ev.I_COLLAPSED] = -1
+        self.counts = np.zeros(len(ev.EVENT_NAMES), dtype=np.int64)
         self.rec = np.zeros(32)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2))
         nf = frame_buffer or max(1, min(FRAME_BUFFER_MAX, FRAME_BUFFER_BYTES // per_frame))
@@ -196,7 +196,7 @@ class Simulation:
         # the frame tick at t = 0 goes first among simultaneous entries (lowest sequence number)
         self.ev_t[n] = 0.0
         self.ev_seq[n] = 0
-        self.isc[L.I_SEQ] = 1
+        self.isc[ev.I_SEQ] = 1
         self._init(self.pos, self.vel, self.t_loc, self.radius, self.counter, self.planes_p,
                    self.planes_n, self.gravity, self.box_len, self.periodic, self.origin,
                    self.csize, self.ncell, self.cell, self.head, self.nxt, self.ev_t, self.ev_seq,
@@ -204,18 +204,18 @@ class Simulation:
 
         # compile (or load from the cache) now, so run() times only the run: with t_end < 0
         # the loop returns before touching any event
-        self.fsc[L.F_T_END] = -1.0
+        self.fsc[ev.F_T_END] = -1.0
         self._call(1)
 
     @property
     def time(self) -> float:
         """Time of the last processed event [s]."""
-        return float(self.fsc[L.F_T_CUR])
+        return float(self.fsc[ev.F_T_CUR])
 
     @property
     def collisions(self) -> int:
         """Collisions (pair and wall events) executed so far."""
-        return int(self.isc[L.I_N_EVENTS])
+        return int(self.isc[ev.I_N_EVENTS])
 
     def state_at(self, t: float):
         """Positions [m] and velocities [m/s] of all spheres at time ``t`` ≥ the last event."""
@@ -235,7 +235,7 @@ class Simulation:
             self.rec)
 
     def _frame_block(self) -> FrameBlock | None:
-        f = int(self.isc[L.I_N_FRAMES])
+        f = int(self.isc[ev.I_N_FRAMES])
         if f == 0:
             return None
         pos = self.fr_pos[:f].copy()
@@ -247,16 +247,16 @@ class Simulation:
         pot = -np.einsum("n,fnk,k->f", self.mass, pos, self.gravity)
         step = np.arange(self._frames_emitted, self._frames_emitted + f, dtype=np.int64)
         self._frames_emitted += f
-        self.isc[L.I_N_FRAMES] = 0
+        self.isc[ev.I_N_FRAMES] = 0
         return FrameBlock(step, self.fr_time[:f].copy(), pos, vel, omg, kin_t, kin_r, pot,
                           self.fr_diss[:f].copy())
 
     def _event_block(self) -> EventBlock | None:
-        m = int(self.isc[L.I_N_LOG])
+        m = int(self.isc[ev.I_N_LOG])
         if m == 0:
             return None
         f, i = self.log_f[:m], self.log_i[:m]
-        self.isc[L.I_N_LOG] = 0
+        self.isc[ev.I_N_LOG] = 0
         return EventBlock(f[:, 0].copy(), i[:, 0].astype(np.int8), i[:, 1].copy(),
                           i[:, 2].copy(), f[:, 1].copy(), f[:, 2].copy(), f[:, 3].copy(),
                           i[:, 3].astype(np.int8), i[:, 4].astype(np.int8))
@@ -291,7 +291,7 @@ class Simulation:
             SimulationError: the collapse guard stopped the run (see ``hsgran._loop``).
         """
         t_end = self.scene.duration if until is None else float(until)
-        self.fsc[L.F_T_END] = t_end
+        self.fsc[ev.F_T_END] = t_end
         counts0 = self.counts.copy()
         done0 = self.collisions
         bar = None
@@ -309,19 +309,19 @@ class Simulation:
                     if budget <= 0:
                         break
                 status = self._call(budget)
-                if status in (L.STATUS_FRAMES_FULL, L.STATUS_LOG_FULL, L.STATUS_DONE):
+                if status in (ev.STATUS_FRAMES_FULL, ev.STATUS_LOG_FULL, ev.STATUS_DONE):
                     self._flush(observers)
                 if bar is not None:
                     bar.n = min(self.time, t_end)
                     bar.set_postfix_str(f"{self.collisions:,} collisions", refresh=True)
-                if status == L.STATUS_COLLAPSE:
+                if status == ev.STATUS_COLLAPSE:
                     self._flush(observers)
-                    i = int(self.isc[L.I_COLLAPSED])
+                    i = int(self.isc[ev.I_COLLAPSED])
                     raise SimulationError(
-                        f"sphere {i} had more than {L.MAX_ZERO_TIME_EVENTS} collisions without "
+                        f"sphere {i} had more than {ev.MAX_ZERO_TIME_EVENTS} collisions without "
                         f"time advancing at t = {self.time:.9g} s (inelastic collapse)")
-                if status == L.STATUS_DONE:
-                    self.fsc[L.F_T_CUR] = max(self.time, t_end)
+                if status == ev.STATUS_DONE:
+                    self.fsc[ev.F_T_CUR] = max(self.time, t_end)
                     break
         finally:
             if bar is not None:
@@ -329,7 +329,7 @@ class Simulation:
         wall = time.perf_counter() - wall0
         self._flush(observers)
         d = self.counts - counts0
-        names = L.EVENT_NAMES
+        names = ev.EVENT_NAMES
         events = {names[k]: int(d[k]) for k in range(1, len(names))}
         executed = events["pair"] + events["wall"] + events["cell"]
         summary = RunSummary(events=events, simulated_time=min(self.time, t_end), wall_time=wall,

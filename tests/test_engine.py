@@ -41,8 +41,9 @@ region = {{ lower = [0.0, 0.0, 0.0], upper = [{side}, {side}, {side}] }}
 
 def gas(count=500, phi=0.2, duration=1.0, frame=0.1, seed=1):
     side = (count * 4 / 3 * np.pi * 0.01**3 / phi) ** (1 / 3)
-    return parse_scene(GAS.format(count=count, side=side, duration=duration, frame=frame,
-                                  seed=seed))
+    return parse_scene(
+        GAS.format(count=count, side=side, duration=duration, frame=frame, seed=seed)
+    )
 
 
 class Keep:
@@ -92,7 +93,8 @@ def test_elastic_gas_conserves_energy_and_momentum_over_1e5_collisions():
 #: Collisions over which the cell grid and all-pairs runs must agree exactly. The two paths
 #: round differently (the periodic image shift is applied at other times), and a hard-sphere gas
 #: amplifies a difference about tenfold per collision (mean free path / radius), so 1e-16 grows
-#: to O(1) after ~16 collisions per sphere (measured: 1e-9 is reached near 580); 400 is ~6 per sphere.
+#: to O(1) after ~16 collisions per sphere (measured: 1e-9 is reached near 580); 400 is ~6
+#: per sphere.
 CROSS_CHECK_COLLISIONS = 400
 
 
@@ -102,7 +104,8 @@ def test_cell_grid_and_all_pairs_give_the_same_event_sequence():
     for brute in (False, True):
         keep = Keep()
         Simulation(scene, brute_force=brute, log_events=True).run(
-            max_collisions=CROSS_CHECK_COLLISIONS, observers=[keep])
+            max_collisions=CROSS_CHECK_COLLISIONS, observers=[keep]
+        )
         logs.append((keep.log("i"), keep.log("j"), keep.log("time")))
     (i1, j1, t1), (i2, j2, t2) = logs
     assert len(t1) == len(t2) == CROSS_CHECK_COLLISIONS

@@ -6,8 +6,9 @@ Usage:
 Prints ns/event for each effect set (compile time excluded). The events are processed in
 cache-resident chunks of ``--chunk`` events, each timed on a fresh copy of its inputs, so the
 figure is the arithmetic of the model and not the memory bandwidth of streaming 10⁶ events;
-each chunk's time is the best of ``--repeat`` runs. The events are sphere–sphere collisions of steel spheres (radii 1–10 mm, approach speeds log-uniform
-in 0.01–10 m/s, so all three compression stages occur, random oblique directions and spins).
+each chunk's time is the best of ``--repeat`` runs. The events are sphere–sphere collisions
+of steel spheres (radii 1–10 mm, approach speeds log-uniform in 0.01–10 m/s, so all three
+compression stages occur, random oblique directions and spins).
 Every effect set runs the same events, so differences are the price of the effects.
 """
 
@@ -30,8 +31,10 @@ EFFECT_SETS = (
     ("plasticity+adhesion", ("plasticity", "adhesion")),
     ("rotation+friction", ("rotation", "friction")),
     ("plasticity+rotation+friction", ("plasticity", "rotation", "friction")),
-    ("full model (all effects)", ("plasticity", "adhesion", "rotation", "friction",
-                                  "rolling_resistance")),
+    (
+        "full model (all effects)",
+        ("plasticity", "adhesion", "rotation", "friction", "rolling_resistance"),
+    ),
 )
 
 
@@ -52,16 +55,31 @@ def make_events(k: int, seed: int = 1):
     vel2 = np.zeros((k, 3))
     omg1 = rng.normal(scale=50.0, size=(k, 3))
     omg2 = rng.normal(scale=50.0, size=(k, 3))
-    return dict(vel1=vel1, omg1=omg1, vel2=vel2, omg2=omg2, normal=n, inv_m1=1 / m1,
-                inv_m2=1 / m2, inv_i1=1 / (0.4 * m1 * r1**2), inv_i2=1 / (0.4 * m2 * r2**2),
-                r1=r1, r2=r2, curv=1 / r1 + 1 / r2)
+    return dict(
+        vel1=vel1,
+        omg1=omg1,
+        vel2=vel2,
+        omg2=omg2,
+        normal=n,
+        inv_m1=1 / m1,
+        inv_m2=1 / m2,
+        inv_i1=1 / (0.4 * m1 * r1**2),
+        inv_i2=1 / (0.4 * m2 * r2**2),
+        r1=r1,
+        r2=r2,
+        curv=1 / r1 + 1 / r2,
+    )
 
 
 def rows_for(fixed: bool) -> np.ndarray:
     """One pair row: steel on steel with friction, rolling friction and adhesion."""
     steel = BUILTIN_MATERIALS["steel"]
-    contact = Contact(sliding_friction=0.3, rolling_friction=0.01, work_of_adhesion=0.05,
-                      restitution=0.8 if fixed else None)
+    contact = Contact(
+        sliding_friction=0.3,
+        rolling_friction=0.01,
+        work_of_adhesion=0.05,
+        restitution=0.8 if fixed else None,
+    )
     return pair_row(steel, steel, contact)[None, :]
 
 
@@ -72,8 +90,20 @@ def time_set(names, events, chunk: int, repeat: int) -> float:
     batch = make_batch_resolver(effects)
     rows = rows_for(fixed)
     k = events["vel1"].shape[0]
-    keys = ("vel1", "omg1", "vel2", "omg2", "normal", "inv_m1", "inv_m2", "inv_i1", "inv_i2",
-            "r1", "r2", "curv")
+    keys = (
+        "vel1",
+        "omg1",
+        "vel2",
+        "omg2",
+        "normal",
+        "inv_m1",
+        "inv_m2",
+        "inv_i1",
+        "inv_i2",
+        "r1",
+        "r2",
+        "curv",
+    )
     idx = np.zeros(chunk, dtype=np.int64)
     recs = np.empty((chunk, REC_SIZE))
     small = {key: v[:chunk].copy() for key, v in events.items()}
@@ -82,7 +112,7 @@ def time_set(names, events, chunk: int, repeat: int) -> float:
     for start in range(0, k, chunk):
         best = np.inf
         for _ in range(repeat):
-            args = [events[key][start:start + chunk].copy() for key in keys]
+            args = [events[key][start : start + chunk].copy() for key in keys]
             t = time.perf_counter()
             hit = batch(*args, rows, idx, recs)
             best = min(best, time.perf_counter() - t)
@@ -100,9 +130,12 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=3)
     args = ap.parse_args(argv)
     events = make_events(args.events)
-    print(f"# hsgran collision kernel, {args.events:,} random sphere–sphere events, "
-          f"chunks of {args.chunk:,} (best of {args.repeat}); {platform.processor() or platform.machine()}, "
-          f"Python {platform.python_version()}")
+    print(
+        f"# hsgran collision kernel, {args.events:,} random sphere–sphere events, "
+        f"chunks of {args.chunk:,} (best of {args.repeat}); "
+        f"{platform.processor() or platform.machine()}, "
+        f"Python {platform.python_version()}"
+    )
     print(f"{'effect set':<34} {'ns/event':>9}")
     for label, names in EFFECT_SETS:
         print(f"{label:<34} {time_set(names, events, args.chunk, args.repeat):9.1f}", flush=True)
