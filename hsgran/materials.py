@@ -299,7 +299,9 @@ def pair_row(m1: Material, m2: Material, contact: Contact) -> np.ndarray:
         MODEL.md §2 (E*, σ_y = min), §3.2 (δ_y, F_y, W_y), §3.3–3.4 (λ, W_p, p_p), §3.8 (f0).
     """
     e_star = effective_modulus(m1, m2)
-    yielding = m1 if m1.yield_stress <= m2.yield_stress else m2
+    # The body that reaches c σ_y first yields first (MODEL.md §2 takes the lower σ_y); on a tie
+    # in σ_y the lower c decides, so the result does not depend on which body is called 1.
+    yielding = min((m1, m2), key=lambda m: (m.yield_stress, yield_factor_of(contact, m)))
     sigma = yielding.yield_stress
     c = yield_factor_of(contact, yielding)
     kappa = float(contact.hardness_factor)
