@@ -77,27 +77,28 @@ ZERO_TIME_REL = 4e-16
 MAX_ZERO_TIME_EVENTS = 1000
 
 
+# The arrays travel in seven tuples, unpacked where they are used:
+#   flight = (pos, vel, t_loc, radius, counter)       what a prediction needs of every sphere
+#   dyn    = (omg, inv_m, inv_i, mat, zstreak)         what a collision needs in addition
+#   walls  = (planes_p, planes_n, planes_mat, planes_vel, planes_omg)
+#   space  = (gravity, box_len, periodic)
+#   grid   = (origin, csize, ncell, cell, head, nxt, prv)
+#   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where)
+#   out    = (fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i)
+
+
 @njit(inline="always")
 def _state_at(pos, vel, t_loc, j, t, gravity, grav_on):
     """Position and velocity of sphere j at time t (its stored state is at t_loc[j])."""
     dt = t - t_loc[j]
     if grav_on:
-        return (
-            flight_position(pos[j, 0], vel[j, 0], gravity[0], dt),
-            flight_position(pos[j, 1], vel[j, 1], gravity[1], dt),
-            flight_position(pos[j, 2], vel[j, 2], gravity[2], dt),
-            vel[j, 0] + gravity[0] * dt,
-            vel[j, 1] + gravity[1] * dt,
-            vel[j, 2] + gravity[2] * dt,
-        )
-    return (
-        pos[j, 0] + vel[j, 0] * dt,
-        pos[j, 1] + vel[j, 1] * dt,
-        pos[j, 2] + vel[j, 2] * dt,
-        vel[j, 0],
-        vel[j, 1],
-        vel[j, 2],
-    )
+        return (flight_position(pos[j, 0], vel[j, 0], gravity[0], dt),
+                flight_position(pos[j, 1], vel[j, 1], gravity[1], dt),
+                flight_position(pos[j, 2], vel[j, 2], gravity[2], dt),
+                vel[j, 0] + gravity[0] * dt, vel[j, 1] + gravity[1] * dt,
+                vel[j, 2] + gravity[2] * dt)
+    return (pos[j, 0] + vel[j, 0] * dt, pos[j, 1] + vel[j, 1] * dt, pos[j, 2] + vel[j, 2] * dt,
+            vel[j, 0], vel[j, 1], vel[j, 2])
 
 
 @njit(inline="always")
@@ -127,66 +128,22 @@ def _min_image(d, k, box_len, periodic):
 
 
 @njit(inline="always")
-def _pair_time(
-    i,
-    j,
-    xi,
-    yi,
-    zi,
-    ui,
-    vi,
-    wi,
-    t_now,
-    pos,
-    vel,
-    t_loc,
-    radius,
-    gravity,
-    box_len,
-    periodic,
-    grav_on,
-):
-    xj, yj, zj, uj, vj, wj = _state_at(pos, vel, t_loc, j, t_now, gravity, grav_on)
-    return pair_contact_time(
-        _min_image(xi - xj, 0, box_len, periodic),
-        _min_image(yi - yj, 1, box_len, periodic),
-        _min_image(zi - zj, 2, box_len, periodic),
-        ui - uj,
-        vi - vj,
-        wi - wj,
-        radius[i] + radius[j],
-    )
+def _note_progress(p, t, t_loc, zstreak):
+    """Count consecutive events of sphere p that do not advance its clock (collapse guard)."""
+    if t - t_loc[p] <= ZERO_TIME_REL * max(1.0, t):
+        zstreak[p] += 1
+    else:
+        zstreak[p] = 0
 
 
 @njit(inline="always")
-def _predict(
-    i,
-    t_now,
-    pos,
-    vel,
-    t_loc,
-    radius,
-    counter,
-    planes_p,
-    planes_n,
-    gravity,
-    box_len,
-    periodic,
-    origin,
-    csize,
-    ncell,
-    cell,
-    head,
-    nxt,
-    ev_t,
-    ev_seq,
-    ev_kind,
-    ev_partner,
-    ev_pcount,
-    isc,
-    grav_on,
-):
+def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
     """Find sphere i's next event after t_now and store it (the heap is updated by the caller)."""
+    pos, vel, t_loc, radius, counter = flight
+    planes_p, planes_n = walls[0], walls[1]
+    gravity, box_len, periodic = space
+    origin, csize, ncell, cell, head, nxt = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5]
+    ev_t, ev_seq, ev_kind, ev_partner, ev_pcount = sched[0], sched[1], sched[2], sched[3], sched[4]
     xi, yi, zi, ui, vi, wi = _state_at(pos, vel, t_loc, i, t_now, gravity, grav_on)
     best = NEVER
     kind = EV_NONE
@@ -204,19 +161,15 @@ def _predict(
         nx = planes_n[w, 0]
         ny = planes_n[w, 1]
         nz = planes_n[w, 2]
-        gap = (
-            (xi - planes_p[w, 0]) * nx
-            + (yi - planes_p[w, 1]) * ny
-            + (zi - planes_p[w, 2]) * nz
-            - radius[i]
-        )
+        gap = ((xi - planes_p[w, 0]) * nx + (yi - planes_p[w, 1]) * ny
+               + (zi - planes_p[w, 2]) * nz - radius[i])
         gn = gravity[0] * nx + gravity[1] * ny + gravity[2] * nz
         tau = plane_contact_time(gap, ui * nx + vi * ny + wi * nz, gn)
         if tau < best:
             best = tau
             kind = EV_WALL
             partner = w
-    # wrapped neighbour coordinates, three per axis (9 modulo operations, not 81)
+    # wrapped neighbour coordinates, computed per axis (9 modulo operations, not 81)
     ax0, ax1 = neighbour_offsets(ncell[0])
     ay0, ay1 = neighbour_offsets(ncell[1])
     az0, az1 = neighbour_offsets(ncell[2])
@@ -227,29 +180,15 @@ def _predict(
         for dy in range(ay0, ay1 + 1):
             sxy = (sx + (cell[i, 1] + dy) % n1) * n2
             for dz in range(az0, az1 + 1):
-                s = sxy + (cell[i, 2] + dz) % n2
-                j = head[s]
+                j = head[sxy + (cell[i, 2] + dz) % n2]
                 while j >= 0:
                     if j != i:
-                        tau = _pair_time(
-                            i,
-                            j,
-                            xi,
-                            yi,
-                            zi,
-                            ui,
-                            vi,
-                            wi,
-                            t_now,
-                            pos,
-                            vel,
-                            t_loc,
-                            radius,
-                            gravity,
-                            box_len,
-                            periodic,
-                            grav_on,
-                        )
+                        xj, yj, zj, uj, vj, wj = _state_at(pos, vel, t_loc, j, t_now, gravity,
+                                                           grav_on)
+                        tau = pair_contact_time(_min_image(xi - xj, 0, box_len, periodic),
+                                                _min_image(yi - yj, 1, box_len, periodic),
+                                                _min_image(zi - zj, 2, box_len, periodic),
+                                                ui - uj, vi - vj, wi - wj, radius[i] + radius[j])
                         if tau < best:
                             best = tau
                             kind = EV_PAIR
@@ -263,6 +202,13 @@ def _predict(
     isc[I_SEQ] += 1
 
 
+@njit(inline="always")
+def _reschedule(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
+    """Predict sphere i's next event and move its heap entry accordingly."""
+    _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on)
+    heap_update(sched[5], sched[6], sched[0], sched[1], i)
+
+
 def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
     """Compile (init, run_loop) for one combination of flags.
 
@@ -270,122 +216,33 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
     are compiled away. Numba caches one pair of functions per combination on disk.
 
     Returns:
-        ``init(...)`` predicts every sphere's first event and builds the heap;
-        ``run_loop(...)`` runs events (see its docstring).
+        ``init(flight, walls, space, grid, sched, isc)`` predicts every sphere's first event and
+        builds the heap; ``run_loop(...)`` runs events (see its docstring).
     """
 
     @njit
-    def init(
-        pos,
-        vel,
-        t_loc,
-        radius,
-        counter,
-        planes_p,
-        planes_n,
-        gravity,
-        box_len,
-        periodic,
-        origin,
-        csize,
-        ncell,
-        cell,
-        head,
-        nxt,
-        ev_t,
-        ev_seq,
-        ev_kind,
-        ev_partner,
-        ev_pcount,
-        heap,
-        where,
-        isc,
-    ):
-        for i in range(pos.shape[0]):
-            _predict(
-                i,
-                0.0,
-                pos,
-                vel,
-                t_loc,
-                radius,
-                counter,
-                planes_p,
-                planes_n,
-                gravity,
-                box_len,
-                periodic,
-                origin,
-                csize,
-                ncell,
-                cell,
-                head,
-                nxt,
-                ev_t,
-                ev_seq,
-                ev_kind,
-                ev_partner,
-                ev_pcount,
-                isc,
-                grav_on,
-            )
-        heap_build(heap, where, ev_t, ev_seq)
+    def init(flight, walls, space, grid, sched, isc):
+        for i in range(flight[0].shape[0]):
+            _predict(i, 0.0, flight, walls, space, grid, sched, isc, grav_on)
+        heap_build(sched[5], sched[6], sched[0], sched[1])
 
     @njit
-    def run_loop(
-        pos,
-        vel,
-        omg,
-        t_loc,
-        radius,
-        inv_m,
-        inv_i,
-        mat,
-        counter,
-        zstreak,
-        ev_t,
-        ev_seq,
-        ev_kind,
-        ev_partner,
-        ev_pcount,
-        heap,
-        where,
-        planes_p,
-        planes_n,
-        planes_mat,
-        planes_vel,
-        planes_omg,
-        pair_table,
-        gravity,
-        box_len,
-        periodic,
-        origin,
-        csize,
-        ncell,
-        cell,
-        head,
-        nxt,
-        prv,
-        fr_time,
-        fr_pos,
-        fr_vel,
-        fr_omg,
-        fr_diss,
-        log_f,
-        log_i,
-        fsc,
-        isc,
-        counts,
-        max_events,
-        rec,
-    ):
+    def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
+                 max_events, rec):
         """Run events until t_end, a full buffer, or ``max_events``; returns a ``STATUS_*`` code.
 
-        Shapes: N spheres, P planes, M materials, F buffered frames, L buffered log entries.
-        ``omg`` is (N, 3) with rotation and (1, 3) otherwise (never read then); likewise ``fr_omg``.
-        ``log_f`` (L, 4) holds (time, J_n, J_t, e_n) and ``log_i`` (L, 5) holds (kind, i, j, stage,
-        regime) of each executed collision; j = −1 − w for a collision with plane w.
+        The array groups are listed at the top of this module. ``omg`` is (N, 3) with rotation
+        and (1, 3) otherwise (never read then); likewise ``fr_omg``. ``log_f`` (L, 4) holds
+        (time, J_n, J_t, e_n) and ``log_i`` (L, 5) holds (kind, i, j, stage, regime) of each
+        executed collision; j = −1 − w for a collision with plane w.
         """
+        pos, vel, t_loc, radius, counter = flight
+        omg, inv_m, inv_i, mat, zstreak = dyn
+        planes_n, planes_mat, planes_vel, planes_omg = walls[1], walls[2], walls[3], walls[4]
+        gravity, box_len, periodic = space
+        ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
+        ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where = sched
+        fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i = out
         n = pos.shape[0]
         t_end = fsc[F_T_END]
         executed = 0
@@ -429,42 +286,11 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 j = ev_partner[i]
                 if counter[j] != ev_pcount[i]:
                     # stale: the partner moved on since this was predicted; re-predict the owner
-                    _predict(
-                        i,
-                        t,
-                        pos,
-                        vel,
-                        t_loc,
-                        radius,
-                        counter,
-                        planes_p,
-                        planes_n,
-                        gravity,
-                        box_len,
-                        periodic,
-                        origin,
-                        csize,
-                        ncell,
-                        cell,
-                        head,
-                        nxt,
-                        ev_t,
-                        ev_seq,
-                        ev_kind,
-                        ev_partner,
-                        ev_pcount,
-                        isc,
-                        grav_on,
-                    )
-                    heap_update(heap, where, ev_t, ev_seq, i)
+                    _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
                     counts[EV_STALE] += 1
                     continue
-                tol = ZERO_TIME_REL * max(1.0, t)
-                for p in (i, j):
-                    if t - t_loc[p] <= tol:
-                        zstreak[p] += 1
-                    else:
-                        zstreak[p] = 0
+                _note_progress(i, t, t_loc, zstreak)
+                _note_progress(j, t, t_loc, zstreak)
                 _advance(pos, vel, t_loc, i, t, gravity, grav_on)
                 _advance(pos, vel, t_loc, j, t, gravity, grav_on)
                 dx = _min_image(pos[i, 0] - pos[j, 0], 0, box_len, periodic)
@@ -473,153 +299,30 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 dist = math.sqrt(dx * dx + dy * dy + dz * dz)
                 wi = omg[i] if rotation else omg[0]
                 wj = omg[j] if rotation else omg[0]
-                resolve(
-                    vel[i],
-                    wi,
-                    vel[j],
-                    wj,
-                    dx / dist,
-                    dy / dist,
-                    dz / dist,
-                    inv_m[i],
-                    inv_m[j],
-                    inv_i[i],
-                    inv_i[j],
-                    radius[i],
-                    radius[j],
-                    1.0 / radius[i] + 1.0 / radius[j],
-                    pair_table[mat[i], mat[j]],
-                    rec,
-                    plasticity,
-                    friction,
-                    rolling,
-                    adhesion,
-                    rotation,
-                    False,
-                )
+                resolve(vel[i], wi, vel[j], wj, dx / dist, dy / dist, dz / dist, inv_m[i],
+                        inv_m[j], inv_i[i], inv_i[j], radius[i], radius[j],
+                        1.0 / radius[i] + 1.0 / radius[j], pair_table[mat[i], mat[j]], rec,
+                        plasticity, friction, rolling, adhesion, rotation, False)
                 counter[i] += 1
                 counter[j] += 1
-                _predict(
-                    i,
-                    t,
-                    pos,
-                    vel,
-                    t_loc,
-                    radius,
-                    counter,
-                    planes_p,
-                    planes_n,
-                    gravity,
-                    box_len,
-                    periodic,
-                    origin,
-                    csize,
-                    ncell,
-                    cell,
-                    head,
-                    nxt,
-                    ev_t,
-                    ev_seq,
-                    ev_kind,
-                    ev_partner,
-                    ev_pcount,
-                    isc,
-                    grav_on,
-                )
-                heap_update(heap, where, ev_t, ev_seq, i)
-                _predict(
-                    j,
-                    t,
-                    pos,
-                    vel,
-                    t_loc,
-                    radius,
-                    counter,
-                    planes_p,
-                    planes_n,
-                    gravity,
-                    box_len,
-                    periodic,
-                    origin,
-                    csize,
-                    ncell,
-                    cell,
-                    head,
-                    nxt,
-                    ev_t,
-                    ev_seq,
-                    ev_kind,
-                    ev_partner,
-                    ev_pcount,
-                    isc,
-                    grav_on,
-                )
-                heap_update(heap, where, ev_t, ev_seq, j)
+                _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
+                _reschedule(j, t, flight, walls, space, grid, sched, isc, grav_on)
                 other = j
             elif kind == EV_WALL:
                 w = ev_partner[i]
-                if t - t_loc[i] <= ZERO_TIME_REL * max(1.0, t):
-                    zstreak[i] += 1
-                else:
-                    zstreak[i] = 0
+                _note_progress(i, t, t_loc, zstreak)
                 _advance(pos, vel, t_loc, i, t, gravity, grav_on)
                 wi = omg[i] if rotation else omg[0]
-                resolve(
-                    vel[i],
-                    wi,
-                    planes_vel[w],
-                    planes_omg[w],
-                    planes_n[w, 0],
-                    planes_n[w, 1],
-                    planes_n[w, 2],
-                    inv_m[i],
-                    0.0,
-                    inv_i[i],
-                    0.0,
-                    radius[i],
-                    0.0,
-                    1.0 / radius[i],
-                    pair_table[mat[i], planes_mat[w]],
-                    rec,
-                    plasticity,
-                    friction,
-                    rolling,
-                    adhesion,
-                    rotation,
-                    False,
-                )
+                resolve(vel[i], wi, planes_vel[w], planes_omg[w], planes_n[w, 0], planes_n[w, 1],
+                        planes_n[w, 2], inv_m[i], 0.0, inv_i[i], 0.0, radius[i], 0.0,
+                        1.0 / radius[i], pair_table[mat[i], planes_mat[w]], rec, plasticity,
+                        friction, rolling, adhesion, rotation, False)
                 counter[i] += 1
-                _predict(
-                    i,
-                    t,
-                    pos,
-                    vel,
-                    t_loc,
-                    radius,
-                    counter,
-                    planes_p,
-                    planes_n,
-                    gravity,
-                    box_len,
-                    periodic,
-                    origin,
-                    csize,
-                    ncell,
-                    cell,
-                    head,
-                    nxt,
-                    ev_t,
-                    ev_seq,
-                    ev_kind,
-                    ev_partner,
-                    ev_pcount,
-                    isc,
-                    grav_on,
-                )
-                heap_update(heap, where, ev_t, ev_seq, i)
+                _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
                 other = -1 - w
             else:
-                # EV_CELL: move to the neighbouring cell; on a periodic axis wrap the stored state
+                # EV_CELL (EV_NONE has time NEVER and is never popped): move to the neighbouring
+                # cell; on a periodic axis wrap the stored state by one box length
                 code = ev_partner[i]
                 k = code // 2
                 step = 1 if code % 2 == 1 else -1
@@ -635,34 +338,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 cell[i, k] = c
                 remove(i, old, head, nxt, prv)
                 insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
-                _predict(
-                    i,
-                    t,
-                    pos,
-                    vel,
-                    t_loc,
-                    radius,
-                    counter,
-                    planes_p,
-                    planes_n,
-                    gravity,
-                    box_len,
-                    periodic,
-                    origin,
-                    csize,
-                    ncell,
-                    cell,
-                    head,
-                    nxt,
-                    ev_t,
-                    ev_seq,
-                    ev_kind,
-                    ev_partner,
-                    ev_pcount,
-                    isc,
-                    grav_on,
-                )
-                heap_update(heap, where, ev_t, ev_seq, i)
+                _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
                 counts[EV_CELL] += 1
                 continue
 
@@ -672,8 +348,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
             executed += 1
             fsc[F_DISSIPATED] += rec[REC_ENERGY_LOST]
             if zstreak[i] > MAX_ZERO_TIME_EVENTS or (
-                other >= 0 and zstreak[other] > MAX_ZERO_TIME_EVENTS
-            ):
+                    other >= 0 and zstreak[other] > MAX_ZERO_TIME_EVENTS):
                 isc[I_COLLAPSED] = i
                 return STATUS_COLLAPSE
             if log_on:

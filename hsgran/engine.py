@@ -27,9 +27,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hsgran import _loop as ev
+from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.grid import cell_coordinates, insert, plan_grid, slot_of
-from hsgran.impact import SOLID_SPHERE_INERTIA
+from hsgran.materials import SOLID_SPHERE_INERTIA
 
 #: Bytes of frame buffer the engine may hold; frames are handed to observers when it is full.
 FRAME_BUFFER_BYTES = 32 * 2**20
@@ -180,7 +181,7 @@ class Simulation:
         self.isc = np.zeros(ev.I_SIZE, dtype=np.int64)
         self.isc[ev.I_COLLAPSED] = -1
         self.counts = np.zeros(len(ev.EVENT_NAMES), dtype=np.int64)
-        self.rec = np.zeros(32)
+        self.rec = np.zeros(REC_SIZE)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2))
         nf = frame_buffer or max(1, min(FRAME_BUFFER_MAX, FRAME_BUFFER_BYTES // per_frame))
         self.fr_time = np.zeros(nf)
@@ -197,10 +198,21 @@ class Simulation:
         self.ev_t[n] = 0.0
         self.ev_seq[n] = 0
         self.isc[ev.I_SEQ] = 1
-        self._init(self.pos, self.vel, self.t_loc, self.radius, self.counter, self.planes_p,
-                   self.planes_n, self.gravity, self.box_len, self.periodic, self.origin,
-                   self.csize, self.ncell, self.cell, self.head, self.nxt, self.ev_t, self.ev_seq,
-                   self.ev_kind, self.ev_partner, self.ev_pcount, self.heap, self.where, self.isc)
+        # the array groups of hsgran._loop (see its module notes); the tuples hold references,
+        # so the compiled code updates these arrays in place
+        self._groups = (
+            (self.pos, self.vel, self.t_loc, self.radius, self.counter),
+            (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak),
+            (self.planes_p, self.planes_n, self.planes_mat, self.planes_vel, self.planes_omg),
+            (self.gravity, self.box_len, self.periodic),
+            (self.origin, self.csize, self.ncell, self.cell, self.head, self.nxt, self.prv),
+            (self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount, self.heap,
+             self.where),
+            (self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.fr_diss, self.log_f,
+             self.log_i),
+        )
+        flight, _, walls, space, grid, sched, _ = self._groups
+        self._init(flight, walls, space, grid, sched, self.isc)
 
         # compile (or load from the cache) now, so run() times only the run: with t_end < 0
         # the loop returns before touching any event
@@ -224,15 +236,8 @@ class Simulation:
         return self.pos + dt * (self.vel + 0.5 * g * dt), self.vel + g * dt
 
     def _call(self, max_events: int) -> int:
-        return self._loop(
-            self.pos, self.vel, self.omg, self.t_loc, self.radius, self.inv_m, self.inv_i,
-            self.mat, self.counter, self.zstreak, self.ev_t, self.ev_seq, self.ev_kind,
-            self.ev_partner, self.ev_pcount, self.heap, self.where, self.planes_p, self.planes_n,
-            self.planes_mat, self.planes_vel, self.planes_omg, self.pair_table, self.gravity,
-            self.box_len, self.periodic, self.origin, self.csize, self.ncell, self.cell,
-            self.head, self.nxt, self.prv, self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg,
-            self.fr_diss, self.log_f, self.log_i, self.fsc, self.isc, self.counts, max_events,
-            self.rec)
+        return self._loop(*self._groups, self.pair_table, self.fsc, self.isc, self.counts,
+                          max_events, self.rec)
 
     def _frame_block(self) -> FrameBlock | None:
         f = int(self.isc[ev.I_N_FRAMES])
@@ -309,13 +314,12 @@ class Simulation:
                     if budget <= 0:
                         break
                 status = self._call(budget)
-                if status in (ev.STATUS_FRAMES_FULL, ev.STATUS_LOG_FULL, ev.STATUS_DONE):
+                if status in (ev.STATUS_FRAMES_FULL, ev.STATUS_LOG_FULL):
                     self._flush(observers)
                 if bar is not None:
                     bar.n = min(self.time, t_end)
                     bar.set_postfix_str(f"{self.collisions:,} collisions", refresh=True)
                 if status == ev.STATUS_COLLAPSE:
-                    self._flush(observers)
                     i = int(self.isc[ev.I_COLLAPSED])
                     raise SimulationError(
                         f"sphere {i} had more than {ev.MAX_ZERO_TIME_EVENTS} collisions without "
@@ -324,10 +328,10 @@ class Simulation:
                     self.fsc[ev.F_T_CUR] = max(self.time, t_end)
                     break
         finally:
+            wall = time.perf_counter() - wall0
             if bar is not None:
                 bar.close()
-        wall = time.perf_counter() - wall0
-        self._flush(observers)
+            self._flush(observers)  # whatever ends the run, buffered frames and events reach disk
         d = self.counts - counts0
         names = ev.EVENT_NAMES
         events = {names[k]: int(d[k]) for k in range(1, len(names))}

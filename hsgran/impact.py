@@ -20,11 +20,16 @@ from hsgran.contact import model
 from hsgran.contact.normal import STAGE_NAMES
 from hsgran.contact.tangential import REGIME_NAMES
 from hsgran.effects import Effects
-from hsgran.errors import InputError
-from hsgran.materials import Contact, CriticalValues, Material, critical_values, pair_row
-
-#: Moment of inertia factor of a solid sphere, I = k m R² (MODEL.md §8, [LIT]).
-SOLID_SPHERE_INERTIA = 0.4
+from hsgran.errors import InputError, check_positive
+from hsgran.materials import (
+    SOLID_SPHERE_INERTIA,
+    Contact,
+    CriticalValues,
+    Material,
+    critical_values,
+    pair_row,
+    solid_sphere_mass,
+)
 
 
 @dataclass(frozen=True)
@@ -93,18 +98,9 @@ def _vector(value, key: str) -> np.ndarray:
     return arr.copy()
 
 
-def _positive(value, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)):
-        raise InputError(f"must be a number, got {value!r}", key)
-    x = float(value)
-    if not (math.isfinite(x) and x > 0.0):
-        raise InputError(f"must be a finite number > 0, got {value!r}", key)
-    return x
-
-
 def sphere_mass(material: Material, radius: float) -> float:
     """Mass of a solid sphere [kg] from density [kg/m³] and radius [m]."""
-    return material.density * 4.0 / 3.0 * math.pi * radius**3
+    return solid_sphere_mass(material.density, radius)
 
 
 def oblique_velocity(speed: float, angle_deg: float) -> np.ndarray:
@@ -114,7 +110,7 @@ def oblique_velocity(speed: float, angle_deg: float) -> np.ndarray:
     Raises:
         InputError: speed ≤ 0 or angle outside [0, 90).
     """
-    speed = _positive(speed, "speed")
+    speed = check_positive(speed, "speed")
     if (isinstance(angle_deg, bool) or not isinstance(angle_deg, (int, float))
             or not 0.0 <= angle_deg < 90.0):
         raise InputError(f"must be in [0, 90) degrees from the wall normal, got {angle_deg!r}",
@@ -198,7 +194,7 @@ def sphere_wall_impact(sphere: Material, wall: Material, radius: float, velocity
     contact = Contact() if contact is None else contact
     _check_contact_for(effects, contact)
     _check_sphere(sphere, "sphere")
-    radius = _positive(radius, "radius")
+    radius = check_positive(radius, "radius")
     n = _vector(normal, "normal")
     norm = float(np.linalg.norm(n))
     if norm == 0.0:
@@ -239,8 +235,8 @@ def sphere_sphere_impact(material1: Material, material2: Material, radius1: floa
     _check_contact_for(effects, contact)
     _check_sphere(material1, "material1")
     _check_sphere(material2, "material2")
-    r1 = _positive(radius1, "radius1")
-    r2 = _positive(radius2, "radius2")
+    r1 = check_positive(radius1, "radius1")
+    r2 = check_positive(radius2, "radius2")
     n = _vector(normal, "normal")
     norm = float(np.linalg.norm(n))
     if norm == 0.0:

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hsgran.errors import InputError, did_you_mean
+from hsgran.errors import InputError, check_number, did_you_mean
 
 # ---- model constants (MODEL.md §8) -------------------------------------------------------
 
@@ -35,6 +35,15 @@ PLASTIC_RATIO_DEFAULT = 110.0
 #: Coefficient of the JKR-matched line-force estimate f0 = C (E* R* Δγ²)^(1/3) [-], with
 #: C = (3/4)(8/(9π))^(1/3). MODEL.md §3.8, [OURS, low confidence].
 JKR_LINE_FORCE_COEF = 0.75 * (8.0 / (9.0 * math.pi)) ** (1.0 / 3.0)
+
+#: Moment of inertia factor of a solid sphere, I = k m R² (MODEL.md §8, [LIT]).
+SOLID_SPHERE_INERTIA = 0.4
+
+
+def solid_sphere_mass(density, radius):
+    """Mass ρ 4/3 π R³ [kg] of solid spheres; density [kg/m³] and radius [m], scalars or arrays."""
+    return density * (4.0 / 3.0 * math.pi) * radius**3
+
 
 # ---- layout of a pair row (read by the compiled kernels) ---------------------------------
 P_E_STAR = 0  #: effective modulus E* [Pa]
@@ -172,15 +181,6 @@ def pair_key(a: str, b: str) -> frozenset:
 
 # ---- validation helpers ------------------------------------------------------------------
 
-def _number(value, key: str, *, allow_inf: bool = False) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"must be a number, got {value!r}", key)
-    x = float(value)
-    if math.isnan(x) or (math.isinf(x) and not allow_inf):
-        raise InputError(f"must be a finite number, got {value!r}", key)
-    return x
-
-
 def check_material(m: Material, key: str) -> Material:
     """Check that a material's numbers are physical; return it unchanged.
 
@@ -188,20 +188,20 @@ def check_material(m: Material, key: str) -> Material:
         InputError: naming the offending key (``materials.steel.poisson_ratio``).
     """
     rigid_ok = m.name == "rigid"
-    rho = _number(m.density, f"{key}.density", allow_inf=rigid_ok)
+    rho = check_number(m.density, f"{key}.density", allow_inf=rigid_ok)
     if rho <= 0:
         raise InputError(f"must be > 0 kg/m^3, got {m.density!r}", f"{key}.density")
-    e = _number(m.youngs_modulus, f"{key}.youngs_modulus", allow_inf=rigid_ok)
+    e = check_number(m.youngs_modulus, f"{key}.youngs_modulus", allow_inf=rigid_ok)
     if e <= 0:
         raise InputError(f"must be > 0 Pa, got {m.youngs_modulus!r}", f"{key}.youngs_modulus")
-    nu = _number(m.poisson_ratio, f"{key}.poisson_ratio")
+    nu = check_number(m.poisson_ratio, f"{key}.poisson_ratio")
     if not -1.0 < nu < 0.5:
         raise InputError(f"must be in (-1, 0.5), got {m.poisson_ratio!r}", f"{key}.poisson_ratio")
-    sy = _number(m.yield_stress, f"{key}.yield_stress", allow_inf=True)
+    sy = check_number(m.yield_stress, f"{key}.yield_stress", allow_inf=True)
     if sy <= 0:
         raise InputError(f"must be > 0 Pa (inf: never yields), got {m.yield_stress!r}",
                          f"{key}.yield_stress")
-    g = _number(m.surface_energy, f"{key}.surface_energy")
+    g = check_number(m.surface_energy, f"{key}.surface_energy")
     if g < 0:
         raise InputError(f"must be >= 0 J/m^2, got {m.surface_energy!r}", f"{key}.surface_energy")
     return m
@@ -214,18 +214,18 @@ def check_contact(c: Contact, key: str) -> Contact:
         InputError: naming the offending key.
     """
     if c.sliding_friction is not None:
-        if _number(c.sliding_friction, f"{key}.sliding_friction") < 0:
+        if check_number(c.sliding_friction, f"{key}.sliding_friction") < 0:
             raise InputError(f"must be >= 0, got {c.sliding_friction!r}",
                              f"{key}.sliding_friction")
-    if _number(c.rolling_friction, f"{key}.rolling_friction") < 0:
+    if check_number(c.rolling_friction, f"{key}.rolling_friction") < 0:
         raise InputError(f"must be >= 0, got {c.rolling_friction!r}", f"{key}.rolling_friction")
     if c.restitution is not None:
-        e = _number(c.restitution, f"{key}.restitution")
+        e = check_number(c.restitution, f"{key}.restitution")
         if not 0.0 <= e <= 1.0:
             raise InputError(f"must be in [0, 1], got {c.restitution!r}", f"{key}.restitution")
     for name in ("adhesion_line_force", "work_of_adhesion"):
         v = getattr(c, name)
-        if v is not None and _number(v, f"{key}.{name}") < 0:
+        if v is not None and check_number(v, f"{key}.{name}") < 0:
             raise InputError(f"must be >= 0, got {v!r}", f"{key}.{name}")
     if c.adhesion_line_force is not None and c.work_of_adhesion is not None:
         raise InputError("give adhesion_line_force or work_of_adhesion, not both", key)
@@ -233,11 +233,11 @@ def check_contact(c: Contact, key: str) -> Contact:
         if c.yield_factor != "jackson-green":
             raise InputError(f"must be a number or 'jackson-green', got {c.yield_factor!r}",
                              f"{key}.yield_factor")
-    elif _number(c.yield_factor, f"{key}.yield_factor") <= 0:
+    elif check_number(c.yield_factor, f"{key}.yield_factor") <= 0:
         raise InputError(f"must be > 0, got {c.yield_factor!r}", f"{key}.yield_factor")
-    if _number(c.hardness_factor, f"{key}.hardness_factor") <= 0:
+    if check_number(c.hardness_factor, f"{key}.hardness_factor") <= 0:
         raise InputError(f"must be > 0, got {c.hardness_factor!r}", f"{key}.hardness_factor")
-    if _number(c.plastic_ratio, f"{key}.plastic_ratio") <= 1:
+    if check_number(c.plastic_ratio, f"{key}.plastic_ratio") <= 1:
         raise InputError(f"must be > 1, got {c.plastic_ratio!r}", f"{key}.plastic_ratio")
     yf = 1.6 if isinstance(c.yield_factor, str) else float(c.yield_factor)
     if c.hardness_factor <= 2.0 * yf / 3.0:
@@ -400,7 +400,7 @@ def material_from_table(name: str, table, key: str) -> Material:
     for k in _REQUIRED_MATERIAL_KEYS:
         if k not in table:
             raise InputError("missing value", f"{key}.{k}")
-    vals = {k: _number(table[k], f"{key}.{k}", allow_inf=(k == "yield_stress")) for k in table}
+    vals = {k: check_number(table[k], f"{key}.{k}", allow_inf=(k == "yield_stress")) for k in table}
     m = Material(name=name, source=f"user table [{key}]", **vals)
     return check_material(m, key)
 
@@ -430,7 +430,7 @@ def contact_from_table(table, key: str, known_materials) -> tuple[frozenset, Con
     kwargs = {k: v for k, v in table.items() if k != "between"}
     for k, v in kwargs.items():
         if not (k == "yield_factor" and isinstance(v, str)):
-            kwargs[k] = _number(v, f"{key}.{k}")
+            kwargs[k] = check_number(v, f"{key}.{k}")
     return pair_key(*between), check_contact(Contact(**kwargs), key)
 
 

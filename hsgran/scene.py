@@ -77,8 +77,14 @@ from scipy.spatial import cKDTree
 
 from hsgran._jit import njit
 from hsgran.effects import Effects
-from hsgran.errors import InputError, did_you_mean
-from hsgran.materials import PAIR_ROW_SIZE, Material, MaterialLibrary, pair_row
+from hsgran.errors import InputError, check_number, check_positive, did_you_mean, short_repr
+from hsgran.materials import (
+    PAIR_ROW_SIZE,
+    Material,
+    MaterialLibrary,
+    pair_row,
+    solid_sphere_mass,
+)
 
 # ---- limits and tolerances ---------------------------------------------------------------
 
@@ -223,7 +229,7 @@ class Scene:
     def mass(self) -> np.ndarray:
         """Mass of every sphere, ρ 4/3 π R³ [kg], shape (N,)."""
         density = np.array([m.density for m in self.materials])
-        return density[self.material] * (4.0 / 3.0 * math.pi) * self.radius**3
+        return solid_sphere_mass(density[self.material], self.radius)
 
     def pair_table(self) -> np.ndarray:
         """Parameter rows of every pair of used materials (see :func:`hsgran.materials.pair_row`).
@@ -308,7 +314,7 @@ def _check_keys(table: dict, allowed, key: str) -> None:
 
 def _table(value, key: str, what: str = "a table") -> dict:
     if not isinstance(value, dict):
-        raise InputError(f"must be {what}, got {_short(value)}", key)
+        raise InputError(f"must be {what}, got {short_repr(value)}", key)
     return value
 
 
@@ -322,48 +328,27 @@ def _array_of_tables(doc: dict, name: str) -> list[dict]:
     return value
 
 
-def _short(value) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
-
-
 def _require(table: dict, name: str, key: str, what: str):
     if name not in table:
         raise InputError(f"missing value ({what})", f"{key}.{name}")
     return table[name]
 
 
-def _number(value, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(f"must be a number, got {_short(value)}", key)
-    x = float(value)
-    if not math.isfinite(x):
-        raise InputError(f"must be a finite number, got {value!r}", key)
-    return x
-
-
-def _positive(value, key: str, unit: str) -> float:
-    x = _number(value, key)
-    if x <= 0.0:
-        raise InputError(f"must be > 0 {unit}, got {value!r}", key)
-    return x
-
-
 def _vector(value, key: str) -> np.ndarray:
     if not isinstance(value, list) or len(value) != 3:
-        raise InputError(f"must be a list of 3 numbers [x, y, z], got {_short(value)}", key)
-    return np.array([_number(v, f"{key}[{i}]") for i, v in enumerate(value)])
+        raise InputError(f"must be a list of 3 numbers [x, y, z], got {short_repr(value)}", key)
+    return np.array([check_number(v, f"{key}[{i}]") for i, v in enumerate(value)])
 
 
 def _string(value, key: str) -> str:
     if not isinstance(value, str):
-        raise InputError(f"must be a string, got {_short(value)}", key)
+        raise InputError(f"must be a string, got {short_repr(value)}", key)
     return value
 
 
 def _count(value, key: str) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
-        raise InputError(f"must be a whole number, got {_short(value)}", key)
+        raise InputError(f"must be a whole number, got {short_repr(value)}", key)
     if value < 1:
         raise InputError(f"must be >= 1, got {value}", key)
     return value
@@ -482,7 +467,7 @@ class _SceneBuilder:
         _check_keys(sc, SCENE_KEYS, "scene")
         default_name = Path(self.source).stem if self.source != "<string>" else "unnamed"
         self.name = _string(sc.get("name", default_name), "scene.name")
-        self.duration = _positive(
+        self.duration = check_positive(
             _require(sc, "duration", "scene", "simulated time in s"), "scene.duration", "s")
         self.effects = Effects.parse(sc.get("effects", []), "scene.effects")
         if "gravity" in sc:
@@ -497,19 +482,19 @@ class _SceneBuilder:
             self.gravity = np.zeros(3)
         seed = sc.get("seed", 0)
         if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-            raise InputError(f"must be a whole number >= 0, got {_short(seed)}", "scene.seed")
+            raise InputError(f"must be a whole number >= 0, got {short_repr(seed)}", "scene.seed")
         self.seed = seed
         periodic = sc.get("periodic", [False, False, False])
         if (not isinstance(periodic, list) or len(periodic) != 3
                 or not all(isinstance(b, bool) for b in periodic)):
-            raise InputError(f"must be a list of 3 booleans [x, y, z], got {_short(periodic)}",
+            raise InputError(f"must be a list of 3 booleans [x, y, z], got {short_repr(periodic)}",
                              "scene.periodic")
         self.periodic = tuple(periodic)
 
     def _parse_output(self) -> None:
         out = _table(self.doc.get("output", {}), "output", "a table ([output])")
         _check_keys(out, OUTPUT_KEYS, "output")
-        self.frame_interval = _positive(
+        self.frame_interval = check_positive(
             _require(out, "frame_interval", "output", "time between frames in s"),
             "output.frame_interval", "s")
         frames = self.duration / self.frame_interval
@@ -622,7 +607,7 @@ class _SceneBuilder:
             _check_keys(p, PARTICLE_KEYS, key)
             material = self._particle_material(
                 _require(p, "material", key, "a material name"), f"{key}.material")
-            radius = _positive(_require(p, "radius", key, "in m"), f"{key}.radius", "m")
+            radius = check_positive(_require(p, "radius", key, "in m"), f"{key}.radius", "m")
             position = _vector(_require(p, "position", key, "[x, y, z] in m"),
                                f"{key}.position")
             velocity = _vector(p["velocity"], f"{key}.velocity") if "velocity" in p \
@@ -661,15 +646,15 @@ class _SceneBuilder:
             r = _require(f, "radius", key, "in m: a number or [min, max]")
             if isinstance(r, list):
                 if len(r) != 2:
-                    raise InputError(f"must be a number or [min, max], got {_short(r)}",
+                    raise InputError(f"must be a number or [min, max], got {short_repr(r)}",
                                      f"{key}.radius")
-                r_min = _positive(r[0], f"{key}.radius[0]", "m")
-                r_max = _positive(r[1], f"{key}.radius[1]", "m")
+                r_min = check_positive(r[0], f"{key}.radius[0]", "m")
+                r_max = check_positive(r[1], f"{key}.radius[1]", "m")
                 if r_min > r_max:
                     raise InputError(f"min {_fmt(r_min)} exceeds max {_fmt(r_max)}",
                                      f"{key}.radius")
             else:
-                r_min = r_max = _positive(r, f"{key}.radius", "m")
+                r_min = r_max = check_positive(r, f"{key}.radius", "m")
             region = _table(_require(f, "region", key, "{ lower = [...], upper = [...] }"),
                             f"{key}.region")
             _check_keys(region, REGION_KEYS, f"{key}.region")
@@ -690,7 +675,7 @@ class _SceneBuilder:
                             f"[{_fmt(lower[i])}, {_fmt(upper[i])}] is not inside "
                             f"[{_fmt(self.box_lower[i])}, {_fmt(self.box_upper[i])}])",
                             f"{key}.region")
-            speed = _number(f.get("speed", 0.0), f"{key}.speed")
+            speed = check_number(f.get("speed", 0.0), f"{key}.speed")
             if speed < 0.0:
                 raise InputError(f"must be >= 0 m/s, got {f['speed']!r}", f"{key}.speed")
             omega = self._angular_velocity(f, key)

@@ -178,10 +178,10 @@ def test_positions_at_frame_times_follow_the_parabola_exactly():
     np.testing.assert_allclose(pos, want, rtol=0, atol=1e-15)
 
 
-@pytest.mark.parametrize("count", [1, 2])
-def test_frames_do_not_change_the_trajectory(count):
+@pytest.mark.parametrize("seed", [1, 2])
+def test_frames_do_not_change_the_trajectory(seed):
     """Delayed states: sampling more often must give the same collisions bit for bit."""
-    scene = gas(count=100, duration=3.0, frame=0.5, seed=count)
+    scene = gas(count=100, duration=3.0, frame=0.5, seed=seed)
     logs = []
     for frame in (0.5, 0.01):
         scene.frame_interval = frame
