@@ -35,7 +35,7 @@ from hsgran.motion import (
     NEVER,
     face_exit_time,
     flight_position,
-    pair_contact_time,
+    pair_contact_before,
     plane_contact_time,
 )
 
@@ -77,41 +77,48 @@ ZERO_TIME_REL = 4e-16
 MAX_ZERO_TIME_EVENTS = 1000
 
 
+# What a prediction reads of a neighbour sits in one 64-byte row (one cache line) of ``st``:
+S_X = 0  #: position x, y, z at the sphere's local time [m] (columns 0–2)
+S_V = 3  #: velocity at the local time [m/s] (columns 3–5)
+S_T = 6  #: local time: the stored state is valid at this instant [s]
+S_R = 7  #: radius [m]
+S_WIDTH = 8
+
 # The arrays travel in seven tuples, unpacked where they are used:
-#   flight = (pos, vel, t_loc, radius, counter)       what a prediction needs of every sphere
+#   flight = (st, counter)                             what a prediction needs of every sphere
 #   dyn    = (omg, inv_m, inv_i, mat, zstreak)         what a collision needs in addition
 #   walls  = (planes_p, planes_n, planes_mat, planes_vel, planes_omg)
 #   space  = (gravity, box_len, periodic)
-#   grid   = (origin, csize, ncell, cell, head, nxt, prv)
-#   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where)
+#   grid   = (origin, csize, ncell, cell, head, nxt, prv, heads)   heads: scratch, 27 slots
+#   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s)
 #   out    = (fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i)
 
 
 @njit(inline="always")
-def _state_at(pos, vel, t_loc, j, t, gravity, grav_on):
-    """Position and velocity of sphere j at time t (its stored state is at t_loc[j])."""
-    dt = t - t_loc[j]
+def _state_at(st, j, t, gravity, grav_on):
+    """Position and velocity of sphere j at time t (its stored state is at ``st[j, S_T]``)."""
+    dt = t - st[j, S_T]
     if grav_on:
-        return (flight_position(pos[j, 0], vel[j, 0], gravity[0], dt),
-                flight_position(pos[j, 1], vel[j, 1], gravity[1], dt),
-                flight_position(pos[j, 2], vel[j, 2], gravity[2], dt),
-                vel[j, 0] + gravity[0] * dt, vel[j, 1] + gravity[1] * dt,
-                vel[j, 2] + gravity[2] * dt)
-    return (pos[j, 0] + vel[j, 0] * dt, pos[j, 1] + vel[j, 1] * dt, pos[j, 2] + vel[j, 2] * dt,
-            vel[j, 0], vel[j, 1], vel[j, 2])
+        return (flight_position(st[j, 0], st[j, 3], gravity[0], dt),
+                flight_position(st[j, 1], st[j, 4], gravity[1], dt),
+                flight_position(st[j, 2], st[j, 5], gravity[2], dt),
+                st[j, 3] + gravity[0] * dt, st[j, 4] + gravity[1] * dt,
+                st[j, 5] + gravity[2] * dt)
+    return (st[j, 0] + st[j, 3] * dt, st[j, 1] + st[j, 4] * dt, st[j, 2] + st[j, 5] * dt,
+            st[j, 3], st[j, 4], st[j, 5])
 
 
 @njit(inline="always")
-def _advance(pos, vel, t_loc, j, t, gravity, grav_on):
+def _advance(st, j, t, gravity, grav_on):
     """Move sphere j's stored state along its flight to time t."""
-    x, y, z, u, v, w = _state_at(pos, vel, t_loc, j, t, gravity, grav_on)
-    pos[j, 0] = x
-    pos[j, 1] = y
-    pos[j, 2] = z
-    vel[j, 0] = u
-    vel[j, 1] = v
-    vel[j, 2] = w
-    t_loc[j] = t
+    x, y, z, u, v, w = _state_at(st, j, t, gravity, grav_on)
+    st[j, 0] = x
+    st[j, 1] = y
+    st[j, 2] = z
+    st[j, 3] = u
+    st[j, 4] = v
+    st[j, 5] = w
+    st[j, S_T] = t
 
 
 @njit(inline="always")
@@ -128,23 +135,34 @@ def _min_image(d, k, box_len, periodic):
 
 
 @njit(inline="always")
-def _note_progress(p, t, t_loc, zstreak):
+def _note_progress(p, t, st, zstreak):
     """Count consecutive events of sphere p that do not advance its clock (collapse guard)."""
-    if t - t_loc[p] <= ZERO_TIME_REL * max(1.0, t):
+    if t - st[p, S_T] <= ZERO_TIME_REL * max(1.0, t):
         zstreak[p] += 1
     else:
         zstreak[p] = 0
 
 
 @njit(inline="always")
+def _wrap(c, n):
+    """Cell coordinate c ∈ [−1, n] wrapped into [0, n)."""
+    if c >= n:
+        return c - n
+    if c < 0:
+        return c + n
+    return c
+
+
+@njit(inline="always")
 def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
     """Find sphere i's next event after t_now and store it (the heap is updated by the caller)."""
-    pos, vel, t_loc, radius, counter = flight
+    st, counter = flight
     planes_p, planes_n = walls[0], walls[1]
     gravity, box_len, periodic = space
     origin, csize, ncell, cell, head, nxt = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5]
     ev_t, ev_seq, ev_kind, ev_partner, ev_pcount = sched[0], sched[1], sched[2], sched[3], sched[4]
-    xi, yi, zi, ui, vi, wi = _state_at(pos, vel, t_loc, i, t_now, gravity, grav_on)
+    xi, yi, zi, ui, vi, wi = _state_at(st, i, t_now, gravity, grav_on)
+    ri = st[i, S_R]
     best = NEVER
     kind = EV_NONE
     partner = -1
@@ -162,38 +180,52 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
         ny = planes_n[w, 1]
         nz = planes_n[w, 2]
         gap = ((xi - planes_p[w, 0]) * nx + (yi - planes_p[w, 1]) * ny
-               + (zi - planes_p[w, 2]) * nz - radius[i])
+               + (zi - planes_p[w, 2]) * nz - ri)
         gn = gravity[0] * nx + gravity[1] * ny + gravity[2] * nz
         tau = plane_contact_time(gap, ui * nx + vi * ny + wi * nz, gn)
         if tau < best:
             best = tau
             kind = EV_WALL
             partner = w
-    # wrapped neighbour coordinates, computed per axis (9 modulo operations, not 81)
+    # the 27 neighbouring slots: one modulo per axis, then offsets of ±1 wrap by a comparison
+    # (integer division costs tens of cycles, and this is the innermost loop of the engine)
     ax0, ax1 = neighbour_offsets(ncell[0])
     ay0, ay1 = neighbour_offsets(ncell[1])
     az0, az1 = neighbour_offsets(ncell[2])
+    n0 = ncell[0]
     n1 = ncell[1]
     n2 = ncell[2]
+    bx = cell[i, 0] % n0
+    by = cell[i, 1] % n1
+    bz = cell[i, 2] % n2
+    # First gather the heads of the 27 lists, then walk them: the head loads do not depend on
+    # each other, so their cache misses overlap (measured 1.2x faster predictions at N = 1e6,
+    # where the grid does not fit the cache; no change at N = 1e3).
+    heads = grid[7]
+    m = 0
     for dx in range(ax0, ax1 + 1):
-        sx = ((cell[i, 0] + dx) % ncell[0]) * n1
+        sx = _wrap(bx + dx, n0) * n1
         for dy in range(ay0, ay1 + 1):
-            sxy = (sx + (cell[i, 1] + dy) % n1) * n2
+            sxy = (sx + _wrap(by + dy, n1)) * n2
             for dz in range(az0, az1 + 1):
-                j = head[sxy + (cell[i, 2] + dz) % n2]
-                while j >= 0:
-                    if j != i:
-                        xj, yj, zj, uj, vj, wj = _state_at(pos, vel, t_loc, j, t_now, gravity,
-                                                           grav_on)
-                        tau = pair_contact_time(_min_image(xi - xj, 0, box_len, periodic),
-                                                _min_image(yi - yj, 1, box_len, periodic),
-                                                _min_image(zi - zj, 2, box_len, periodic),
-                                                ui - uj, vi - vj, wi - wj, radius[i] + radius[j])
-                        if tau < best:
-                            best = tau
-                            kind = EV_PAIR
-                            partner = j
-                    j = nxt[j]
+                j = head[sxy + _wrap(bz + dz, n2)]
+                if j >= 0:
+                    heads[m] = j
+                    m += 1
+    for q in range(m):
+        j = heads[q]
+        while j >= 0:
+            if j != i:
+                xj, yj, zj, uj, vj, wj = _state_at(st, j, t_now, gravity, grav_on)
+                tau = pair_contact_before(_min_image(xi - xj, 0, box_len, periodic),
+                                          _min_image(yi - yj, 1, box_len, periodic),
+                                          _min_image(zi - zj, 2, box_len, periodic),
+                                          ui - uj, vi - vj, wi - wj, ri + st[j, S_R], best)
+                if tau < best:
+                    best = tau
+                    kind = EV_PAIR
+                    partner = j
+            j = nxt[j]
     ev_t[i] = t_now + best
     ev_kind[i] = kind
     ev_partner[i] = partner
@@ -206,7 +238,7 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
 def _reschedule(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
     """Predict sphere i's next event and move its heap entry accordingly."""
     _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on)
-    heap_update(sched[5], sched[6], sched[0], sched[1], i)
+    heap_update(sched[5], sched[6], sched[7], sched[8], i, sched[0][i], sched[1][i])
 
 
 def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
@@ -224,7 +256,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
     def init(flight, walls, space, grid, sched, isc):
         for i in range(flight[0].shape[0]):
             _predict(i, 0.0, flight, walls, space, grid, sched, isc, grav_on)
-        heap_build(sched[5], sched[6], sched[0], sched[1])
+        heap_build(sched[5], sched[6], sched[7], sched[8], sched[0], sched[1])
 
     @njit
     def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
@@ -236,19 +268,19 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
         (time, J_n, J_t, e_n) and ``log_i`` (L, 5) holds (kind, i, j, stage, regime) of each
         executed collision; j = −1 − w for a collision with plane w.
         """
-        pos, vel, t_loc, radius, counter = flight
+        st, counter = flight
         omg, inv_m, inv_i, mat, zstreak = dyn
         planes_n, planes_mat, planes_vel, planes_omg = walls[1], walls[2], walls[3], walls[4]
         gravity, box_len, periodic = space
         ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
-        ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where = sched
+        ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s = sched
         fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i = out
-        n = pos.shape[0]
+        n = st.shape[0]
         t_end = fsc[F_T_END]
         executed = 0
         while True:
             e = heap[0]
-            t = ev_t[e]
+            t = key_t[0]
             if t > t_end or t == NEVER:
                 return STATUS_DONE
             fsc[F_T_CUR] = t
@@ -258,7 +290,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 fr_time[f] = t
                 fr_diss[f] = fsc[F_DISSIPATED]
                 for j in range(n):
-                    x, y, z, u, v, w = _state_at(pos, vel, t_loc, j, t, gravity, grav_on)
+                    x, y, z, u, v, w = _state_at(st, j, t, gravity, grav_on)
                     fr_pos[f, j, 0] = x
                     fr_pos[f, j, 1] = y
                     fr_pos[f, j, 2] = z
@@ -274,7 +306,7 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 ev_t[n] = isc[I_FRAME_INDEX] * fsc[F_FRAME_DT]
                 ev_seq[n] = isc[I_SEQ]
                 isc[I_SEQ] += 1
-                heap_update(heap, where, ev_t, ev_seq, n)
+                heap_update(heap, where, key_t, key_s, n, ev_t[n], ev_seq[n])
                 counts[EV_FRAME] += 1
                 if f + 1 == fr_time.shape[0]:
                     return STATUS_FRAMES_FULL
@@ -289,19 +321,21 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                     _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
                     counts[EV_STALE] += 1
                     continue
-                _note_progress(i, t, t_loc, zstreak)
-                _note_progress(j, t, t_loc, zstreak)
-                _advance(pos, vel, t_loc, i, t, gravity, grav_on)
-                _advance(pos, vel, t_loc, j, t, gravity, grav_on)
-                dx = _min_image(pos[i, 0] - pos[j, 0], 0, box_len, periodic)
-                dy = _min_image(pos[i, 1] - pos[j, 1], 1, box_len, periodic)
-                dz = _min_image(pos[i, 2] - pos[j, 2], 2, box_len, periodic)
+                _note_progress(i, t, st, zstreak)
+                _note_progress(j, t, st, zstreak)
+                _advance(st, i, t, gravity, grav_on)
+                _advance(st, j, t, gravity, grav_on)
+                dx = _min_image(st[i, 0] - st[j, 0], 0, box_len, periodic)
+                dy = _min_image(st[i, 1] - st[j, 1], 1, box_len, periodic)
+                dz = _min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
                 dist = math.sqrt(dx * dx + dy * dy + dz * dz)
                 wi = omg[i] if rotation else omg[0]
                 wj = omg[j] if rotation else omg[0]
-                resolve(vel[i], wi, vel[j], wj, dx / dist, dy / dist, dz / dist, inv_m[i],
-                        inv_m[j], inv_i[i], inv_i[j], radius[i], radius[j],
-                        1.0 / radius[i] + 1.0 / radius[j], pair_table[mat[i], mat[j]], rec,
+                ri = st[i, S_R]
+                rj = st[j, S_R]
+                resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, dx / dist, dy / dist,
+                        dz / dist, inv_m[i], inv_m[j], inv_i[i], inv_i[j], ri, rj,
+                        1.0 / ri + 1.0 / rj, pair_table[mat[i], mat[j]], rec,
                         plasticity, friction, rolling, adhesion, rotation, False)
                 counter[i] += 1
                 counter[j] += 1
@@ -310,12 +344,13 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 other = j
             elif kind == EV_WALL:
                 w = ev_partner[i]
-                _note_progress(i, t, t_loc, zstreak)
-                _advance(pos, vel, t_loc, i, t, gravity, grav_on)
+                _note_progress(i, t, st, zstreak)
+                _advance(st, i, t, gravity, grav_on)
                 wi = omg[i] if rotation else omg[0]
-                resolve(vel[i], wi, planes_vel[w], planes_omg[w], planes_n[w, 0], planes_n[w, 1],
-                        planes_n[w, 2], inv_m[i], 0.0, inv_i[i], 0.0, radius[i], 0.0,
-                        1.0 / radius[i], pair_table[mat[i], planes_mat[w]], rec, plasticity,
+                ri = st[i, S_R]
+                resolve(st[i, S_V:S_V + 3], wi, planes_vel[w], planes_omg[w], planes_n[w, 0],
+                        planes_n[w, 1], planes_n[w, 2], inv_m[i], 0.0, inv_i[i], 0.0, ri, 0.0,
+                        1.0 / ri, pair_table[mat[i], planes_mat[w]], rec, plasticity,
                         friction, rolling, adhesion, rotation, False)
                 counter[i] += 1
                 _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
@@ -331,10 +366,10 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 if periodic[k]:
                     if c >= ncell[k]:
                         c = 0
-                        pos[i, k] -= box_len[k]
+                        st[i, k] -= box_len[k]
                     elif c < 0:
                         c = ncell[k] - 1
-                        pos[i, k] += box_len[k]
+                        st[i, k] += box_len[k]
                 cell[i, k] = c
                 remove(i, old, head, nxt, prv)
                 insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)

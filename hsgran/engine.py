@@ -30,6 +30,7 @@ from hsgran import _loop as ev
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.grid import cell_coordinates, insert, plan_grid, slot_of
+from hsgran.events.queue import new_heap
 from hsgran.materials import SOLID_SPHERE_INERTIA
 
 #: Bytes of frame buffer the engine may hold; frames are handed to observers when it is full.
@@ -96,6 +97,17 @@ class RunSummary:
 
 _LOOPS: dict = {}
 
+#: Cache-line size [bytes] to which the per-sphere rows are aligned.
+CACHE_LINE = 64
+
+
+def _aligned_rows(n: int, width: int) -> np.ndarray:
+    """Zeroed float64 array (n, width) whose first row starts on a cache-line boundary."""
+    pad = CACHE_LINE // 8
+    buf = np.zeros(n * width + pad)
+    off = (-buf.ctypes.data % CACHE_LINE) // 8
+    return buf[off:off + n * width].reshape(n, width)
+
 
 def _compiled(flags):
     """(init, loop) compiled for one combination of effect and engine flags (memoised)."""
@@ -127,18 +139,23 @@ class Simulation:
         self._flags = (bool(eff.plasticity), bool(eff.friction), bool(eff.rolling_resistance),
                        bool(eff.adhesion), self.rotation, bool(eff.gravity), self.log_events)
         self.gravity = np.ascontiguousarray(scene.gravity, dtype=np.float64)
-        self.pos = np.ascontiguousarray(scene.position, dtype=np.float64).copy()
-        self.vel = np.ascontiguousarray(scene.velocity, dtype=np.float64).copy()
+        # one 64-byte row per sphere: position, velocity, local time, radius (hsgran._loop S_*)
+        self.state = _aligned_rows(n, ev.S_WIDTH)
+        self.pos = self.state[:, ev.S_X:ev.S_X + 3]
+        self.vel = self.state[:, ev.S_V:ev.S_V + 3]
+        self.t_loc = self.state[:, ev.S_T]
+        self.radius = self.state[:, ev.S_R]
+        self.pos[:] = scene.position
+        self.vel[:] = scene.velocity
+        self.radius[:] = scene.radius
         self.omg = (np.ascontiguousarray(scene.angular_velocity, dtype=np.float64).copy()
                     if self.rotation else np.zeros((1, 3)))
-        self.radius = np.ascontiguousarray(scene.radius, dtype=np.float64)
         self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)
         self.inv_m = 1.0 / self.mass
         self.inv_i = 1.0 / (SOLID_SPHERE_INERTIA * self.mass * self.radius**2)
-        self.mat = np.ascontiguousarray(scene.material, dtype=np.int64)
-        self.t_loc = np.zeros(n)
+        self.mat = np.ascontiguousarray(scene.material, dtype=np.int32)
         self.counter = np.zeros(n, dtype=np.int64)
-        self.zstreak = np.zeros(n, dtype=np.int64)
+        self.zstreak = np.zeros(n, dtype=np.int32)
         self.pair_table = np.ascontiguousarray(scene.pair_table())
         planes = list(scene.planes)
         self.planes_p = np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3)
@@ -161,21 +178,21 @@ class Simulation:
             self.ncell = np.ones(3, dtype=np.int64)
         elif np.any(self.periodic & (self.ncell < 3)):
             raise SimulationError("a periodic axis needs at least 3 cells of one largest diameter")
-        self.cell = cell_coordinates(self.pos, self.origin, self.csize, self.ncell, self.periodic)
-        self.head = np.full(int(np.prod(self.ncell)), -1, dtype=np.int64)
-        self.nxt = np.full(n, -1, dtype=np.int64)
-        self.prv = np.full(n, -1, dtype=np.int64)
+        self.cell = cell_coordinates(self.pos, self.origin, self.csize, self.ncell,
+                                     self.periodic).astype(np.int32)
+        self.head = np.full(int(np.prod(self.ncell)), -1, dtype=np.int32)
+        self.nxt = np.full(n, -1, dtype=np.int32)
+        self.prv = np.full(n, -1, dtype=np.int32)
         for i in range(n):
             insert(i, slot_of(self.cell[i, 0], self.cell[i, 1], self.cell[i, 2], self.ncell),
                    self.head, self.nxt, self.prv)
         # one pending event per sphere, entry n is the frame tick
         self.ev_t = np.full(n + 1, np.inf)
         self.ev_seq = np.zeros(n + 1, dtype=np.int64)
-        self.ev_kind = np.zeros(n + 1, dtype=np.int64)
-        self.ev_partner = np.full(n + 1, -1, dtype=np.int64)
+        self.ev_kind = np.zeros(n + 1, dtype=np.int8)
+        self.ev_partner = np.full(n + 1, -1, dtype=np.int32)
         self.ev_pcount = np.zeros(n + 1, dtype=np.int64)
-        self.heap = np.zeros(n + 1, dtype=np.int64)
-        self.where = np.zeros(n + 1, dtype=np.int64)
+        self.heap, self.where, self.key_t, self.key_s = new_heap(n + 1)
         self.fsc = np.zeros(ev.F_SIZE)
         self.fsc[ev.F_FRAME_DT] = scene.frame_interval
         self.isc = np.zeros(ev.I_SIZE, dtype=np.int64)
@@ -201,13 +218,14 @@ class Simulation:
         # the array groups of hsgran._loop (see its module notes); the tuples hold references,
         # so the compiled code updates these arrays in place
         self._groups = (
-            (self.pos, self.vel, self.t_loc, self.radius, self.counter),
+            (self.state, self.counter),
             (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak),
             (self.planes_p, self.planes_n, self.planes_mat, self.planes_vel, self.planes_omg),
             (self.gravity, self.box_len, self.periodic),
-            (self.origin, self.csize, self.ncell, self.cell, self.head, self.nxt, self.prv),
+            (self.origin, self.csize, self.ncell, self.cell, self.head, self.nxt, self.prv,
+             np.zeros(27, dtype=np.int32)),
             (self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount, self.heap,
-             self.where),
+             self.where, self.key_t, self.key_s),
             (self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.fr_diss, self.log_f,
              self.log_i),
         )
