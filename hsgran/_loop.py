@@ -8,7 +8,10 @@ part in an event (delayed states, DynamO); frames evaluate every sphere's parabo
 time without touching the stored states, so the output interval never changes the trajectory.
 
 Event kinds: ``EV_PAIR`` (sphere–sphere), ``EV_WALL`` (sphere–plane), ``EV_CELL`` (a sphere
-leaves its cell; periodic wrap), and the frame tick. The collision itself is the kernel of
+leaves its cell; periodic wrap), and the frame tick. Pop, re-check, execute: a popped collision
+is executed only if its partner is unchanged (else the owner re-predicts: "stale") and the bodies
+still approach at the contact point (else both re-predict: "miss", a grazing contact that
+round-off turned around). The collision itself is the kernel of
 :mod:`hsgran.contact.model`, inlined with the scene's effect flags as constants.
 
 Everything here is array-in, array-out; the scalar state lives in ``fsc`` (floats) and ``isc``
@@ -29,7 +32,7 @@ from hsgran.contact.model import (
     REC_STAGE,
     resolve,
 )
-from hsgran.events.grid import insert, neighbour_offsets, remove, slot_of
+from hsgran.events.grid import insert, remove, slot_of
 from hsgran.events.queue import heap_build, heap_update
 from hsgran.motion import (
     NEVER,
@@ -45,7 +48,8 @@ EV_WALL = 2  #: sphere–plane collision
 EV_CELL = 3  #: sphere leaves its cell
 EV_FRAME = 4  #: output tick (entry N)
 EV_STALE = 5  #: (counter only) popped pair events dropped because the partner changed
-EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale")
+EV_MISS = 6  #: (counter only) popped collisions whose bodies were found not approaching
+EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss")
 
 # float scalars
 F_T_CUR = 0  #: time of the last popped event [s]
@@ -71,9 +75,10 @@ STATUS_COLLAPSE = 4  #: a sphere had too many events without time advancing
 #: A sphere whose event happens less than ZERO_TIME_REL × max(1 s, t) after its previous one
 #: made no progress in time: that is double round-off of the clock.
 ZERO_TIME_REL = 4e-16
-#: Consecutive no-progress events of one sphere after which the run stops with an error instead
-#: of looping forever (inelastic collapse or a rounding loop). Legitimate simultaneous events
-#: (a Newton's cradle, a symmetric three-body hit) involve a sphere a handful of times.
+#: The retry limit of pop–re-check–execute: consecutive events of one sphere that do not advance
+#: its clock (re-check failures, collisions) after which the run stops with an error instead of
+#: looping forever (inelastic collapse or a rounding loop). Legitimate simultaneous events (a
+#: Newton's cradle, a symmetric three-body hit) involve a sphere a handful of times.
 MAX_ZERO_TIME_EVENTS = 1000
 
 
@@ -89,7 +94,9 @@ S_WIDTH = 8
 #   dyn    = (omg, inv_m, inv_i, mat, zstreak)         what a collision needs in addition
 #   walls  = (planes_p, planes_n, planes_mat, planes_vel, planes_omg)
 #   space  = (gravity, box_len, periodic)
-#   grid   = (origin, csize, ncell, cell, head, nxt, prv, heads)   heads: scratch, 27 slots
+#   grid   = (origin, csize, ncell, cell, head, nxt, prv, heads, shifts, ac, ah)   the last four
+#            are scratch space of _predict: 27 list heads, their image shifts (27, 3), and the
+#            per-axis list coordinates and shifts (3, 3)
 #   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s)
 #   out    = (fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i)
 
@@ -144,13 +151,54 @@ def _note_progress(p, t, st, zstreak):
 
 
 @njit(inline="always")
-def _wrap(c, n):
-    """Cell coordinate c ∈ [−1, n] wrapped into [0, n)."""
-    if c >= n:
-        return c - n
-    if c < 0:
-        return c + n
-    return c
+def _axis_cells(c, n, length, periodic, k, ac, ah):
+    """Write the neighbouring list coordinates along axis k and the image shift of each.
+
+    Args:
+        c: Sphere's cell coordinate (in [0, n) on a periodic axis, any integer otherwise).
+        n: Cells on the axis; ≥ 3 on a periodic axis, except 1 for the all-pairs mode.
+        length: Period [m] (periodic axes).
+        periodic: Whether the axis is periodic.
+        k: Axis.
+        ac, ah: (3, 3) scratch: row k receives the coordinates and the shifts [m]; a sphere
+            stored in list coordinate ``ac[k, a]`` is met at its stored position + ``ah[k, a]``.
+
+    Returns:
+        The number of entries written. One modulo, then ±1 offsets wrap by comparison (integer
+        division costs tens of cycles, and this runs at every prediction).
+    """
+    if n == 1:
+        ac[k, 0] = 0
+        ah[k, 0] = 0.0
+        if periodic:  # all-pairs mode: every sphere, in each of its three images
+            ac[k, 1] = 0
+            ac[k, 2] = 0
+            ah[k, 1] = -length
+            ah[k, 2] = length
+            return 3
+        return 1
+    if n == 2:  # a non-periodic hashed axis: both lists, no images
+        ac[k, 0] = 0
+        ac[k, 1] = 1
+        ah[k, 0] = 0.0
+        ah[k, 1] = 0.0
+        return 2
+    b = c % n
+    ac[k, 0] = b - 1
+    ac[k, 1] = b
+    ac[k, 2] = b + 1
+    ah[k, 0] = 0.0
+    ah[k, 1] = 0.0
+    ah[k, 2] = 0.0
+    if b == 0:
+        ac[k, 0] = n - 1
+        if periodic:
+            ah[k, 0] = -length
+    if b == n - 1:
+        ac[k, 2] = 0
+        if periodic:
+            ah[k, 2] = length
+    return 3
 
 
 @njit(inline="always")
@@ -187,40 +235,38 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
             best = tau
             kind = EV_WALL
             partner = w
-    # the 27 neighbouring slots: one modulo per axis, then offsets of ±1 wrap by a comparison
-    # (integer division costs tens of cycles, and this is the innermost loop of the engine)
-    ax0, ax1 = neighbour_offsets(ncell[0])
-    ay0, ay1 = neighbour_offsets(ncell[1])
-    az0, az1 = neighbour_offsets(ncell[2])
-    n0 = ncell[0]
-    n1 = ncell[1]
-    n2 = ncell[2]
-    bx = cell[i, 0] % n0
-    by = cell[i, 1] % n1
-    bz = cell[i, 2] % n2
-    # First gather the heads of the 27 lists, then walk them: the head loads do not depend on
-    # each other, so their cache misses overlap (measured 1.2x faster predictions at N = 1e6,
-    # where the grid does not fit the cache; no change at N = 1e3).
-    heads = grid[7]
+    # The neighbouring lists and, on periodic axes, which image of their spheres can touch
+    # sphere i: the one in the cell next to i's (the nearest image at prediction time is not
+    # always the one that touches later). First gather the heads of the lists, then walk them:
+    # the head loads do not depend on each other, so their cache misses overlap (measured 1.2x
+    # faster predictions at N = 1e6, where the grid does not fit the cache; same at N = 1e3).
+    heads, shifts, ac, ah = grid[7], grid[8], grid[9], grid[10]
+    mx = _axis_cells(cell[i, 0], ncell[0], box_len[0], periodic[0], 0, ac, ah)
+    my = _axis_cells(cell[i, 1], ncell[1], box_len[1], periodic[1], 1, ac, ah)
+    mz = _axis_cells(cell[i, 2], ncell[2], box_len[2], periodic[2], 2, ac, ah)
     m = 0
-    for dx in range(ax0, ax1 + 1):
-        sx = _wrap(bx + dx, n0) * n1
-        for dy in range(ay0, ay1 + 1):
-            sxy = (sx + _wrap(by + dy, n1)) * n2
-            for dz in range(az0, az1 + 1):
-                j = head[sxy + _wrap(bz + dz, n2)]
+    for a in range(mx):
+        sx = ac[0, a] * ncell[1]
+        for b in range(my):
+            sxy = (sx + ac[1, b]) * ncell[2]
+            for c in range(mz):
+                j = head[sxy + ac[2, c]]
                 if j >= 0:
                     heads[m] = j
+                    shifts[m, 0] = ah[0, a]
+                    shifts[m, 1] = ah[1, b]
+                    shifts[m, 2] = ah[2, c]
                     m += 1
     for q in range(m):
         j = heads[q]
+        ox = xi - shifts[q, 0]
+        oy = yi - shifts[q, 1]
+        oz = zi - shifts[q, 2]
         while j >= 0:
             if j != i:
                 xj, yj, zj, uj, vj, wj = _state_at(st, j, t_now, gravity, grav_on)
-                tau = pair_contact_before(_min_image(xi - xj, 0, box_len, periodic),
-                                          _min_image(yi - yj, 1, box_len, periodic),
-                                          _min_image(zi - zj, 2, box_len, periodic),
-                                          ui - uj, vi - vj, wi - wj, ri + st[j, S_R], best)
+                tau = pair_contact_before(ox - xj, oy - yj, oz - zj, ui - uj, vi - vj, wi - wj,
+                                          ri + st[j, S_R], best)
                 if tau < best:
                     best = tau
                     kind = EV_PAIR
@@ -333,10 +379,22 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 wj = omg[j] if rotation else omg[0]
                 ri = st[i, S_R]
                 rj = st[j, S_R]
-                resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, dx / dist, dy / dist,
-                        dz / dist, inv_m[i], inv_m[j], inv_i[i], inv_i[j], ri, rj,
-                        1.0 / ri + 1.0 / rj, pair_table[mat[i], mat[j]], rec,
-                        plasticity, friction, rolling, adhesion, rotation, False)
+                hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, dx / dist,
+                              dy / dist, dz / dist, inv_m[i], inv_m[j], inv_i[i], inv_i[j], ri,
+                              rj, 1.0 / ri + 1.0 / rj, pair_table[mat[i], mat[j]], rec,
+                              plasticity, friction, rolling, adhesion, rotation, False)
+                if not hit:
+                    # re-check failed: a grazing contact that round-off turned into "separating".
+                    # Nothing changed, so no counter moves; both re-predict from the exact contact
+                    # state, which no longer approaches. A loop of such retries is caught by the
+                    # collapse guard (MAX_ZERO_TIME_EVENTS).
+                    _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
+                    _reschedule(j, t, flight, walls, space, grid, sched, isc, grav_on)
+                    counts[EV_MISS] += 1
+                    if zstreak[i] > MAX_ZERO_TIME_EVENTS or zstreak[j] > MAX_ZERO_TIME_EVENTS:
+                        isc[I_COLLAPSED] = i
+                        return STATUS_COLLAPSE
+                    continue
                 counter[i] += 1
                 counter[j] += 1
                 _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
@@ -348,10 +406,19 @@ def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
                 _advance(st, i, t, gravity, grav_on)
                 wi = omg[i] if rotation else omg[0]
                 ri = st[i, S_R]
-                resolve(st[i, S_V:S_V + 3], wi, planes_vel[w], planes_omg[w], planes_n[w, 0],
-                        planes_n[w, 1], planes_n[w, 2], inv_m[i], 0.0, inv_i[i], 0.0, ri, 0.0,
-                        1.0 / ri, pair_table[mat[i], planes_mat[w]], rec, plasticity,
-                        friction, rolling, adhesion, rotation, False)
+                hit = resolve(st[i, S_V:S_V + 3], wi, planes_vel[w], planes_omg[w],
+                              planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_m[i], 0.0,
+                              inv_i[i], 0.0, ri, 0.0, 1.0 / ri,
+                              pair_table[mat[i], planes_mat[w]], rec, plasticity, friction,
+                              rolling, adhesion, rotation, False)
+                if not hit:
+                    # re-check failed (see the pair case)
+                    _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
+                    counts[EV_MISS] += 1
+                    if zstreak[i] > MAX_ZERO_TIME_EVENTS:
+                        isc[I_COLLAPSED] = i
+                        return STATUS_COLLAPSE
+                    continue
                 counter[i] += 1
                 _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
                 other = -1 - w

@@ -25,6 +25,7 @@ LAYERS = {
     "scene": 4,
     "physics": 4,
     "engine": 5,
+    "reference": 5,
     "io.": 5,
     "render": 6,
     "plot": 6,

@@ -20,6 +20,9 @@ from hsgran._jit import njit
 #: particles themselves (a few cells per particle) and never exceeds this many slots.
 MAX_CELLS_PER_PARTICLE = 4
 MAX_CELLS_TOTAL = 1 << 24
+#: Cells a periodic axis needs: with three or more, the cells next to a sphere's own are
+#: distinct, so each neighbour is met in exactly one image (hsgran._loop._axis_cells).
+MIN_PERIODIC_CELLS = 3
 
 
 @njit
@@ -52,16 +55,6 @@ def remove(i, s, head, nxt, prv):
         prv[b] = a
 
 
-@njit
-def neighbour_offsets(n_axis):
-    """Distinct cell offsets to scan along an axis with ``n_axis`` cells: (first, last)."""
-    if n_axis >= 3:
-        return -1, 1
-    if n_axis == 2:
-        return 0, 1
-    return 0, 0
-
-
 def plan_grid(lower, upper, periodic, cell_min, n_particles):
     """Choose the grid for a domain.
 
@@ -79,11 +72,17 @@ def plan_grid(lower, upper, periodic, cell_min, n_particles):
     extent = np.maximum(upper - lower, cell_min)
     n = np.maximum(np.floor(extent / cell_min), 1).astype(np.int64)
     budget = min(MAX_CELLS_TOTAL, max(27, MAX_CELLS_PER_PARTICLE * n_particles))
+    periodic = np.asarray(periodic, dtype=bool)
+    # a periodic axis keeps at least MIN_PERIODIC_CELLS cells (see there); coarsen the open
+    # axes first, the largest first
+    floor = np.where(periodic, np.minimum(n, MIN_PERIODIC_CELLS), 1)
     while int(np.prod(n)) > budget:
-        k = int(np.argmax(np.where(np.asarray(periodic), 0, n)))
-        if n[k] <= 3 or periodic[k]:
-            k = int(np.argmax(n))
-        n[k] = max(1, n[k] // 2)
+        room = np.where(n > floor, n, 0)
+        open_room = np.where(periodic, 0, room)
+        k = int(np.argmax(open_room)) if open_room.max() > 3 else int(np.argmax(room))
+        if room[k] == 0:
+            break
+        n[k] = max(floor[k], n[k] // 2)
     size = extent / n
     return lower.copy(), size, n
 
