@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from hsgran._jit import njit
 from hsgran.contact.model import (
     REC_E_N,
@@ -34,13 +36,16 @@ from hsgran.contact.model import (
 )
 from hsgran.events.grid import insert, remove, slot_of
 from hsgran.events.queue import heap_build, heap_update
+from hsgran.materials import P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import (
     NEVER,
     face_exit_time,
     flight_position,
+    pair_contact_accelerated,
     pair_contact_before,
     plane_contact_time,
 )
+from hsgran.onplane import END_NONE, MS_FLIGHT, MS_REST, plane_segment
 
 EV_NONE = 0  #: nothing scheduled
 EV_PAIR = 1  #: sphere–sphere collision
@@ -49,14 +54,18 @@ EV_CELL = 3  #: sphere leaves its cell
 EV_FRAME = 4  #: output tick (entry N)
 EV_STALE = 5  #: (counter only) popped pair events dropped because the partner changed
 EV_MISS = 6  #: (counter only) popped collisions whose bodies were found not approaching
-EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss")
+EV_STATE = 7  #: a sphere's on-plane motion segment ends (slide → roll, roll → rest, …)
+EV_LAND = 8  #: (counter only) a sphere reached a plane too slowly to bounce and stays on it
+EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss", "state", "land")
 
 # float scalars
 F_T_CUR = 0  #: time of the last popped event [s]
 F_T_END = 1  #: stop before events later than this [s]
 F_FRAME_DT = 2  #: frame interval [s]
 F_DISSIPATED = 3  #: kinetic energy dissipated by collisions so far [J]
-F_SIZE = 4
+F_LANDING_SPEED = 4  #: rebound speed below which a sphere stays on a plane [m/s]
+F_CHI = 5  #: rolling-torque convention while sliding (hsgran.onplane CONVENTION_A/_B)
+F_SIZE = 6
 # int scalars
 I_SEQ = 0  #: next sequence number (tie-break)
 I_N_FRAMES = 1  #: frames in the buffer
@@ -64,7 +73,21 @@ I_N_LOG = 2  #: event-log entries in the buffer
 I_FRAME_INDEX = 3  #: index of the next frame (its time is index × frame_dt)
 I_N_EVENTS = 4  #: events executed in total
 I_COLLAPSED = 5  #: sphere that triggered the collapse guard, or −1
-I_SIZE = 6
+I_PEND_A = 6  #: a sphere whose next event must be predicted before the next pop, or −1
+I_PEND_B = 7  #: a second one, or −1
+I_SIZE = 8
+
+# effect and engine switches: the ``flags`` argument, a bool array of FL_SIZE entries. They are
+# run-time values, so one compiled loop serves every scene (a cold compile costs tens of
+# seconds); a disabled effect is skipped by one predictable branch and its code never runs.
+FL_PLASTICITY = 0  #: staged normal model (MODEL §3); else elastic Hertz
+FL_FRICTION = 1  #: tangential impulse (MODEL §4)
+FL_ROLLING = 2  #: rolling resistance (MODEL §5)
+FL_ADHESION = 3  #: adhesion in recovery (MODEL §3.8)
+FL_ROTATION = 4  #: spins are tracked
+FL_GRAVITY = 5  #: parabolic flight, on-plane motion states
+FL_LOG = 6  #: record every event in the log buffer
+FL_SIZE = 7
 
 STATUS_DONE = 0  #: reached t_end
 STATUS_FRAMES_FULL = 1  #: the frame buffer is full: flush and call again
@@ -80,6 +103,10 @@ ZERO_TIME_REL = 4e-16
 #: looping forever (inelastic collapse or a rounding loop). Legitimate simultaneous events (a
 #: Newton's cradle, a symmetric three-body hit) involve a sphere a handful of times.
 MAX_ZERO_TIME_EVENTS = 1000
+#: A sphere whose gap to a plane is within this fraction of its radius at t = 0 starts on the
+#: plane: the scene check accepts touching spheres written in decimal to 1e-12 (hsgran.scene
+#: CONTACT_TOLERANCE), so the same bound.
+START_GAP_REL = 1e-12
 
 
 # What a prediction reads of a neighbour sits in one 64-byte row (one cache line) of ``st``:
@@ -90,35 +117,49 @@ S_R = 7  #: radius [m]
 S_WIDTH = 8
 
 # The arrays travel in seven tuples, unpacked where they are used:
-#   flight = (st, counter)                             what a prediction needs of every sphere
-#   dyn    = (omg, inv_m, inv_i, mat, zstreak)         what a collision needs in addition
+#   flight = (st, counter, acc, mstate, mplane, seg_end, seg_code)
+#            what a prediction needs of every sphere: the 64-byte rows, the event counters and,
+#            with gravity, each sphere's acceleration [m/s²], motion state (hsgran.onplane MS_*),
+#            plane, and the end time [s] and kind (END_*) of its on-plane motion segment
+#   dyn    = (omg, inv_m, inv_i, mat, zstreak, alpha, seg_dir)
+#            what a collision needs in addition; alpha [rad/s²] and seg_dir (the direction the
+#            segment's end refers to) only with gravity
+# Without gravity acc, mstate, mplane, seg_end, seg_code, alpha and seg_dir are 1-row dummies.
 #   walls  = (planes_p, planes_n, planes_mat, planes_vel, planes_omg)
 #   space  = (gravity, box_len, periodic)
-#   grid   = (origin, csize, ncell, cell, head, nxt, prv, heads, shifts, ac, ah)   the last four
-#            are scratch space of _predict: 27 list heads, their image shifts (27, 3), and the
-#            per-axis list coordinates and shifts (3, 3)
+#   grid   = (origin, csize, ncell, cell, head, nxt, prv, heads, shifts, ac, ah, stack)   the last
+#            five are scratch space: 27 list heads, their image shifts (27, 3), the per-axis list
+#            coordinates and shifts (3, 3) of _predict, and a stack (N,) for waking sleepers
 #   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s)
 #   out    = (fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i)
 
 
 @njit(inline="always")
-def _state_at(st, j, t, gravity, grav_on):
-    """Position and velocity of sphere j at time t (its stored state is at ``st[j, S_T]``)."""
+def _state_at(st, acc, j, t, grav_on):
+    """Position and velocity of sphere j at time t (its stored state is at ``st[j, S_T]``).
+
+    With gravity every sphere moves with its own constant acceleration ``acc[j]``: gravity in
+    flight, the on-plane value while sliding or rolling (hsgran.onplane), zero at rest."""
     dt = t - st[j, S_T]
     if grav_on:
-        return (flight_position(st[j, 0], st[j, 3], gravity[0], dt),
-                flight_position(st[j, 1], st[j, 4], gravity[1], dt),
-                flight_position(st[j, 2], st[j, 5], gravity[2], dt),
-                st[j, 3] + gravity[0] * dt, st[j, 4] + gravity[1] * dt,
-                st[j, 5] + gravity[2] * dt)
+        return (flight_position(st[j, 0], st[j, 3], acc[j, 0], dt),
+                flight_position(st[j, 1], st[j, 4], acc[j, 1], dt),
+                flight_position(st[j, 2], st[j, 5], acc[j, 2], dt),
+                st[j, 3] + acc[j, 0] * dt, st[j, 4] + acc[j, 1] * dt,
+                st[j, 5] + acc[j, 2] * dt)
     return (st[j, 0] + st[j, 3] * dt, st[j, 1] + st[j, 4] * dt, st[j, 2] + st[j, 5] * dt,
             st[j, 3], st[j, 4], st[j, 5])
 
 
 @njit(inline="always")
-def _advance(st, j, t, gravity, grav_on):
-    """Move sphere j's stored state along its flight to time t."""
-    x, y, z, u, v, w = _state_at(st, j, t, gravity, grav_on)
+def _advance(st, acc, omg, alpha, j, t, grav_on, rotation):
+    """Move sphere j's stored state (and its spin, which changes only on a plane) to time t."""
+    if grav_on and rotation:
+        dt = t - st[j, S_T]
+        omg[j, 0] += alpha[j, 0] * dt
+        omg[j, 1] += alpha[j, 1] * dt
+        omg[j, 2] += alpha[j, 2] * dt
+    x, y, z, u, v, w = _state_at(st, acc, j, t, grav_on)
     st[j, 0] = x
     st[j, 1] = y
     st[j, 2] = z
@@ -204,32 +245,45 @@ def _axis_cells(c, n, length, periodic, k, ac, ah):
 @njit(inline="always")
 def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
     """Find sphere i's next event after t_now and store it (the heap is updated by the caller)."""
-    st, counter = flight
+    st, counter, acc, mstate, mplane, seg_end, seg_code = flight
     planes_p, planes_n = walls[0], walls[1]
-    gravity, box_len, periodic = space
+    box_len, periodic = space[1], space[2]
     origin, csize, ncell, cell, head, nxt = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5]
     ev_t, ev_seq, ev_kind, ev_partner, ev_pcount = sched[0], sched[1], sched[2], sched[3], sched[4]
-    xi, yi, zi, ui, vi, wi = _state_at(st, i, t_now, gravity, grav_on)
+    xi, yi, zi, ui, vi, wi = _state_at(st, acc, i, t_now, grav_on)
     ri = st[i, S_R]
     best = NEVER
     kind = EV_NONE
     partner = -1
+    on_plane = -1
+    if grav_on:
+        gi = (acc[i, 0], acc[i, 1], acc[i, 2])
+        if mstate[i] != MS_FLIGHT:
+            on_plane = mplane[i]
+            if seg_end[i] < NEVER:
+                best = max(0.0, seg_end[i] - t_now)
+                kind = EV_STATE
+                partner = seg_code[i]
+    else:
+        gi = (0.0, 0.0, 0.0)
     xs = (xi, yi, zi)
     us = (ui, vi, wi)
     for k in range(3):
         lo = origin[k] + cell[i, k] * csize[k]
-        tau, side = face_exit_time(xs[k], us[k], gravity[k], lo, lo + csize[k])
+        tau, side = face_exit_time(xs[k], us[k], gi[k], lo, lo + csize[k])
         if tau < best:
             best = tau
             kind = EV_CELL
             partner = 2 * k + (1 if side > 0 else 0)
     for w in range(planes_p.shape[0]):
+        if w == on_plane:
+            continue
         nx = planes_n[w, 0]
         ny = planes_n[w, 1]
         nz = planes_n[w, 2]
         gap = ((xi - planes_p[w, 0]) * nx + (yi - planes_p[w, 1]) * ny
                + (zi - planes_p[w, 2]) * nz - ri)
-        gn = gravity[0] * nx + gravity[1] * ny + gravity[2] * nz
+        gn = gi[0] * nx + gi[1] * ny + gi[2] * nz
         tau = plane_contact_time(gap, ui * nx + vi * ny + wi * nz, gn)
         if tau < best:
             best = tau
@@ -264,9 +318,17 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
         oz = zi - shifts[q, 2]
         while j >= 0:
             if j != i:
-                xj, yj, zj, uj, vj, wj = _state_at(st, j, t_now, gravity, grav_on)
-                tau = pair_contact_before(ox - xj, oy - yj, oz - zj, ui - uj, vi - vj, wi - wj,
-                                          ri + st[j, S_R], best)
+                xj, yj, zj, uj, vj, wj = _state_at(st, acc, j, t_now, grav_on)
+                if grav_on and (acc[j, 0] != gi[0] or acc[j, 1] != gi[1] or acc[j, 2] != gi[2]):
+                    # different accelerations (one of them on a plane): a quartic, wanted only
+                    # up to the end of j's current motion segment (j's transition re-predicts)
+                    tau = pair_contact_accelerated(
+                        ox - xj, oy - yj, oz - zj, ui - uj, vi - vj, wi - wj, gi[0] - acc[j, 0],
+                        gi[1] - acc[j, 1], gi[2] - acc[j, 2], ri + st[j, S_R],
+                        min(best, seg_end[j] - t_now))
+                else:
+                    tau = pair_contact_before(ox - xj, oy - yj, oz - zj, ui - uj, vi - vj,
+                                              wi - wj, ri + st[j, S_R], best)
                 if tau < best:
                     best = tau
                     kind = EV_PAIR
@@ -287,187 +349,473 @@ def _reschedule(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
     heap_update(sched[5], sched[6], sched[7], sched[8], i, sched[0][i], sched[1][i])
 
 
-def build(plasticity, friction, rolling, adhesion, rotation, grav_on, log_on):
-    """Compile (init, run_loop) for one combination of flags.
+# The prediction is the hot path: run_loop inlines it at one place only (the re-predictions an
+# event asks for wait in isc[I_PEND_*] until the top of the next iteration), and every other
+# caller goes through these compiled functions. Inlining it at each call site made the loop
+# take minutes to compile.
+@njit
+def _predict_fn(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
+    """:func:`_predict` as a compiled function (for cold callers)."""
+    _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on)
 
-    The flags are free variables of the closures, hence compile-time constants: disabled effects
-    are compiled away. Numba caches one pair of functions per combination on disk.
 
-    Returns:
-        ``init(flight, walls, space, grid, sched, isc)`` predicts every sphere's first event and
-        builds the heap; ``run_loop(...)`` runs events (see its docstring).
+@njit
+def _reschedule_fn(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
+    """:func:`_reschedule` as a compiled function (for cold callers)."""
+    _predict_fn(i, t_now, flight, walls, space, grid, sched, isc, grav_on)
+    heap_update(sched[5], sched[6], sched[7], sched[8], i, sched[0][i], sched[1][i])
+
+
+@njit(inline="always")
+def _repredict_later(isc, p):
+    """Queue sphere p for re-prediction at the top of the next loop iteration (at most two)."""
+    if isc[I_PEND_A] < 0:
+        isc[I_PEND_A] = p
+    else:
+        isc[I_PEND_B] = p
+
+
+@njit
+def _leave_plane(i, flight, dyn, gravity):
+    """Sphere i flies again (a collision moved it): acceleration g, constant spin."""
+    acc, mstate, seg_end, seg_code = flight[2], flight[3], flight[5], flight[6]
+    alpha = dyn[5]
+    mstate[i] = MS_FLIGHT
+    seg_end[i] = NEVER
+    seg_code[i] = END_NONE
+    for k in range(3):
+        acc[i, k] = gravity[k]
+        alpha[i, k] = 0.0
+
+
+@njit
+def _enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                 rotation):
+    """Put sphere i on plane w at time t (or start its next segment there; ``snap`` is the
+    transition that ended the last one): MODEL §5.3 through hsgran.onplane.plane_segment."""
+    st, acc, mstate, mplane, seg_end, seg_code = (flight[0], flight[2], flight[3], flight[4],
+                                                  flight[5], flight[6])
+    omg, mat, alpha, seg_dir = dyn[0], dyn[3], dyn[5], dyn[6]
+    planes_p, planes_n, planes_mat = walls[0], walls[1], walls[2]
+    nx = planes_n[w, 0]
+    ny = planes_n[w, 1]
+    nz = planes_n[w, 2]
+    # exactly on the plane, moving along it: the normal gap and speed left are round-off or
+    # (on landing) the rebound given up, bounded by the landing speed
+    gap = ((st[i, 0] - planes_p[w, 0]) * nx + (st[i, 1] - planes_p[w, 1]) * ny
+           + (st[i, 2] - planes_p[w, 2]) * nz - st[i, S_R])
+    vn = st[i, 3] * nx + st[i, 4] * ny + st[i, 5] * nz
+    st[i, 0] -= gap * nx
+    st[i, 1] -= gap * ny
+    st[i, 2] -= gap * nz
+    st[i, 3] -= vn * nx
+    st[i, 4] -= vn * ny
+    st[i, 5] -= vn * nz
+    row = pair_table[mat[i], planes_mat[w]]
+    mu_s = row[P_MU_S] if friction else 0.0
+    mu_r = row[P_MU_R] if rolling else 0.0
+    wv = omg[i] if rotation else omg[0]
+    state, ax, ay, az, alx, aly, alz, dur, code = plane_segment(
+        st[i, S_V:S_V + 3], wv, planes_n[w], gravity, st[i, S_R], SOLID_SPHERE_INERTIA, mu_s,
+        mu_r, fsc[F_CHI], snap, seg_dir[i])
+    mstate[i] = state
+    mplane[i] = w
+    acc[i, 0] = ax
+    acc[i, 1] = ay
+    acc[i, 2] = az
+    if rotation:
+        alpha[i, 0] = alx
+        alpha[i, 1] = aly
+        alpha[i, 2] = alz
+    seg_end[i] = t + dur
+    seg_code[i] = code
+
+
+#: A sphere can fall asleep on another only if the contact normal is within 60° of the upward
+#: vertical (cos 60° = 0.5): it then lies on top of it, as in a pile, where a sphere in the
+#: pocket of three others touches each at ~35° from the vertical; a sideways touch is a
+#: collision like any other.
+SUPPORT_COS = 0.5
+
+
+@njit
+def _falls_asleep(i, j, nx, ny, nz, st, mstate, gravity, v_sleep):
+    """Which of i, j (n = unit vector from j to i) falls asleep on the other, or −1.
+
+    A sphere falls asleep when it meets a sphere at rest (on a plane or itself asleep) from
+    above, with a relative speed at most ``v_sleep`` (the landing speed): what a collision
+    would have done is a rebound slower than that. This is hsgran's remedy for sphere–sphere
+    inelastic collapse in piles [OURS, after DynamO's sleeping particles]; it gives up at most
+    ½ m v_sleep² per sleeper, and the support is not pushed."""
+    g = math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    if g == 0.0:
+        return -1
+    up = -(nx * gravity[0] + ny * gravity[1] + nz * gravity[2]) / g  # cos(angle(n, up))
+    dvx = st[i, 3] - st[j, 3]
+    dvy = st[i, 4] - st[j, 4]
+    dvz = st[i, 5] - st[j, 5]
+    if dvx * dvx + dvy * dvy + dvz * dvz > v_sleep * v_sleep:
+        return -1
+    if mstate[j] == MS_REST and mstate[i] != MS_REST and up >= SUPPORT_COS:
+        return i
+    if mstate[i] == MS_REST and mstate[j] != MS_REST and -up >= SUPPORT_COS:
+        return j
+    return -1
+
+
+@njit
+def _fall_asleep(a, b, flight, dyn, rotation):
+    """Sphere a rests on sphere b from now on: zero velocity, spin and acceleration."""
+    st, acc, mstate, mplane, seg_end = flight[0], flight[2], flight[3], flight[4], flight[5]
+    omg, alpha = dyn[0], dyn[5]
+    for k in range(3):
+        st[a, S_V + k] = 0.0
+        acc[a, k] = 0.0
+        alpha[a, k] = 0.0
+        if rotation:
+            omg[a, k] = 0.0
+    mstate[a] = MS_REST
+    mplane[a] = -2 - b  # the support: sphere b
+    seg_end[a] = NEVER
+
+
+@njit
+def _wake_sleepers(s, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation):
+    """Sphere s was at rest and has been hit: every sphere asleep on it, and on those, falls."""
+    st, counter, acc, mstate, mplane = flight[0], flight[1], flight[2], flight[3], flight[4]
+    omg, alpha = dyn[0], dyn[5]
+    gravity, box_len, periodic = space
+    ncell, cell, head, nxt, ac, ah, stack = grid[2], grid[3], grid[4], grid[5], grid[9], \
+        grid[10], grid[11]
+    top = 0
+    stack[top] = s
+    top += 1
+    while top > 0:
+        top -= 1
+        b = stack[top]
+        mx = _axis_cells(cell[b, 0], ncell[0], box_len[0], periodic[0], 0, ac, ah)
+        my = _axis_cells(cell[b, 1], ncell[1], box_len[1], periodic[1], 1, ac, ah)
+        mz = _axis_cells(cell[b, 2], ncell[2], box_len[2], periodic[2], 2, ac, ah)
+        for x in range(mx):
+            for y in range(my):
+                for z in range(mz):
+                    q = np.int64(head[(ac[0, x] * ncell[1] + ac[1, y]) * ncell[2] + ac[2, z]])
+                    while q >= 0:
+                        if mstate[q] == MS_REST and mplane[q] == -2 - b:
+                            _advance(st, acc, omg, alpha, q, t, grav_on, rotation)
+                            _leave_plane(q, flight, dyn, gravity)
+                            mplane[q] = -1
+                            counter[q] += 1
+                            _reschedule_fn(q, t, flight, walls, space, grid, sched, isc,
+                                           grav_on)
+                            stack[top] = q
+                            top += 1
+                        q = np.int64(nxt[q])
+
+
+@njit(inline="always")
+def _pressed(i, w, st, walls, gravity):
+    """(normal load per unit mass g_n = −g·n [m/s²], normal velocity v·n [m/s]) of sphere i
+    against plane w."""
+    planes_n = walls[1]
+    gn = -(gravity[0] * planes_n[w, 0] + gravity[1] * planes_n[w, 1]
+           + gravity[2] * planes_n[w, 2])
+    vn = st[i, 3] * planes_n[w, 0] + st[i, 4] * planes_n[w, 1] + st[i, 5] * planes_n[w, 2]
+    return gn, vn
+
+
+@njit(inline="always")
+def _log(out, isc, t, jn, jt, en, kind, i, other, stage, regime):
+    """Append one entry to the event log; True when the buffer is then full.
+
+    Collisions log (J_n, J_t, e_n, stage, regime); motion-state changes (``EV_STATE``,
+    ``EV_LAND``) log zero impulses, e_n = NaN, the new motion state (hsgran.onplane ``MS_*``)
+    as the stage and the transition that ended the last segment (``END_*``) as the regime."""
+    log_f, log_i = out[5], out[6]
+    m = isc[I_N_LOG]
+    log_f[m, 0] = t
+    log_f[m, 1] = jn
+    log_f[m, 2] = jt
+    log_f[m, 3] = en
+    log_i[m, 0] = kind
+    log_i[m, 1] = i
+    log_i[m, 2] = other
+    log_i[m, 3] = stage
+    log_i[m, 4] = regime
+    isc[I_N_LOG] = m + 1
+    return m + 1 == log_f.shape[0]
+
+
+@njit
+def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
+    """Predict every sphere's first event and build the heap (``flags``: see ``FL_*``)."""
+    friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
+    grav_on = flags[FL_GRAVITY]
+    no_end = np.int64(END_NONE)
+    st = flight[0]
+    planes_p, planes_n = walls[0], walls[1]
+    if grav_on:
+        # spheres that start on a plane (touching it, not moving away faster than the
+        # landing speed, pressed on by gravity) start in an on-plane state
+        for i in range(st.shape[0]):
+            for w in range(planes_p.shape[0]):
+                gap = ((st[i, 0] - planes_p[w, 0]) * planes_n[w, 0]
+                       + (st[i, 1] - planes_p[w, 1]) * planes_n[w, 1]
+                       + (st[i, 2] - planes_p[w, 2]) * planes_n[w, 2] - st[i, S_R])
+                gn, vn = _pressed(i, w, st, walls, space[0])
+                if (abs(gap) <= START_GAP_REL * st[i, S_R] and gn > 0.0
+                        and vn <= fsc[F_LANDING_SPEED] and flight[3][i] == MS_FLIGHT):
+                    _enter_plane(i, w, 0.0, no_end, flight, dyn, walls, space[0],
+                                 pair_table, fsc, friction, rolling, rotation)
+    for i in range(st.shape[0]):
+        _predict_fn(i, 0.0, flight, walls, space, grid, sched, isc, grav_on)
+    heap_build(sched[5], sched[6], sched[7], sched[8], sched[0], sched[1])
+
+
+@njit
+def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
+             max_events, rec, flags):
+    """Run events until t_end, a full buffer, or ``max_events``; returns a ``STATUS_*`` code.
+
+    The array groups are listed at the top of this module. ``omg`` is (N, 3) with rotation
+    and (1, 3) otherwise (never read then); likewise ``fr_omg``. ``log_f`` (L, 4) holds
+    (time, J_n, J_t, e_n) and ``log_i`` (L, 5) holds (kind, i, j, stage, regime) of each
+    executed collision; j = −1 − w for a collision with plane w.
     """
+    plasticity, friction, rolling = flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING]
+    adhesion, rotation, grav_on = flags[FL_ADHESION], flags[FL_ROTATION], flags[FL_GRAVITY]
+    log_on = flags[FL_LOG]
+    no_end = np.int64(END_NONE)  # a typed value, not a literal: one compiled _enter_plane
+    st, counter, acc, mstate, mplane = flight[0], flight[1], flight[2], flight[3], flight[4]
+    omg, inv_m, inv_i, mat, zstreak, alpha = dyn[0], dyn[1], dyn[2], dyn[3], dyn[4], dyn[5]
+    planes_n, planes_mat, planes_vel, planes_omg = walls[1], walls[2], walls[3], walls[4]
+    gravity, box_len, periodic = space
+    ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
+    ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s = sched
+    fr_time, fr_pos, fr_vel, fr_omg, fr_diss = out[0], out[1], out[2], out[3], out[4]
+    n = st.shape[0]
+    t_end = fsc[F_T_END]
+    executed = 0
+    while True:
+        for slot in range(I_PEND_A, I_PEND_B + 1):
+            p = isc[slot]
+            if p >= 0:
+                isc[slot] = -1
+                _reschedule(p, fsc[F_T_CUR], flight, walls, space, grid, sched, isc, grav_on)
+        e = heap[0]
+        t = key_t[0]
+        if t > t_end or t == NEVER:
+            return STATUS_DONE
+        fsc[F_T_CUR] = t
+        if e == n:
+            # frame tick: sample every sphere's flight at t, leave the stored states alone
+            f = isc[I_N_FRAMES]
+            fr_time[f] = t
+            fr_diss[f] = fsc[F_DISSIPATED]
+            for j in range(n):
+                x, y, z, u, v, w = _state_at(st, acc, j, t, grav_on)
+                fr_pos[f, j, 0] = x
+                fr_pos[f, j, 1] = y
+                fr_pos[f, j, 2] = z
+                fr_vel[f, j, 0] = u
+                fr_vel[f, j, 1] = v
+                fr_vel[f, j, 2] = w
+                if rotation:
+                    dt = t - st[j, S_T] if grav_on else 0.0
+                    fr_omg[f, j, 0] = omg[j, 0] + alpha[j, 0] * dt if grav_on else omg[j, 0]
+                    fr_omg[f, j, 1] = omg[j, 1] + alpha[j, 1] * dt if grav_on else omg[j, 1]
+                    fr_omg[f, j, 2] = omg[j, 2] + alpha[j, 2] * dt if grav_on else omg[j, 2]
+            isc[I_N_FRAMES] = f + 1
+            isc[I_FRAME_INDEX] += 1
+            ev_t[n] = isc[I_FRAME_INDEX] * fsc[F_FRAME_DT]
+            ev_seq[n] = isc[I_SEQ]
+            isc[I_SEQ] += 1
+            heap_update(heap, where, key_t, key_s, n, ev_t[n], ev_seq[n])
+            counts[EV_FRAME] += 1
+            if f + 1 == fr_time.shape[0]:
+                return STATUS_FRAMES_FULL
+            continue
 
-    @njit
-    def init(flight, walls, space, grid, sched, isc):
-        for i in range(flight[0].shape[0]):
-            _predict(i, 0.0, flight, walls, space, grid, sched, isc, grav_on)
-        heap_build(sched[5], sched[6], sched[7], sched[8], sched[0], sched[1])
-
-    @njit
-    def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
-                 max_events, rec):
-        """Run events until t_end, a full buffer, or ``max_events``; returns a ``STATUS_*`` code.
-
-        The array groups are listed at the top of this module. ``omg`` is (N, 3) with rotation
-        and (1, 3) otherwise (never read then); likewise ``fr_omg``. ``log_f`` (L, 4) holds
-        (time, J_n, J_t, e_n) and ``log_i`` (L, 5) holds (kind, i, j, stage, regime) of each
-        executed collision; j = −1 − w for a collision with plane w.
-        """
-        st, counter = flight
-        omg, inv_m, inv_i, mat, zstreak = dyn
-        planes_n, planes_mat, planes_vel, planes_omg = walls[1], walls[2], walls[3], walls[4]
-        gravity, box_len, periodic = space
-        ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
-        ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s = sched
-        fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i = out
-        n = st.shape[0]
-        t_end = fsc[F_T_END]
-        executed = 0
-        while True:
-            e = heap[0]
-            t = key_t[0]
-            if t > t_end or t == NEVER:
-                return STATUS_DONE
-            fsc[F_T_CUR] = t
-            if e == n:
-                # frame tick: sample every sphere's flight at t, leave the stored states alone
-                f = isc[I_N_FRAMES]
-                fr_time[f] = t
-                fr_diss[f] = fsc[F_DISSIPATED]
-                for j in range(n):
-                    x, y, z, u, v, w = _state_at(st, j, t, gravity, grav_on)
-                    fr_pos[f, j, 0] = x
-                    fr_pos[f, j, 1] = y
-                    fr_pos[f, j, 2] = z
-                    fr_vel[f, j, 0] = u
-                    fr_vel[f, j, 1] = v
-                    fr_vel[f, j, 2] = w
-                    if rotation:
-                        fr_omg[f, j, 0] = omg[j, 0]
-                        fr_omg[f, j, 1] = omg[j, 1]
-                        fr_omg[f, j, 2] = omg[j, 2]
-                isc[I_N_FRAMES] = f + 1
-                isc[I_FRAME_INDEX] += 1
-                ev_t[n] = isc[I_FRAME_INDEX] * fsc[F_FRAME_DT]
-                ev_seq[n] = isc[I_SEQ]
-                isc[I_SEQ] += 1
-                heap_update(heap, where, key_t, key_s, n, ev_t[n], ev_seq[n])
-                counts[EV_FRAME] += 1
-                if f + 1 == fr_time.shape[0]:
-                    return STATUS_FRAMES_FULL
+        i = e
+        kind = ev_kind[i]
+        landed = False
+        if kind == EV_PAIR:
+            j = np.int64(ev_partner[i])  # one integer type for sphere indices: one compile
+            if counter[j] != ev_pcount[i]:
+                # stale: the partner moved on since this was predicted; re-predict the owner
+                _repredict_later(isc, i)
+                counts[EV_STALE] += 1
                 continue
-
-            i = e
-            kind = ev_kind[i]
-            if kind == EV_PAIR:
-                j = ev_partner[i]
-                if counter[j] != ev_pcount[i]:
-                    # stale: the partner moved on since this was predicted; re-predict the owner
-                    _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
-                    counts[EV_STALE] += 1
+            _note_progress(i, t, st, zstreak)
+            _note_progress(j, t, st, zstreak)
+            _advance(st, acc, omg, alpha, i, t, grav_on, rotation)
+            _advance(st, acc, omg, alpha, j, t, grav_on, rotation)
+            dx = _min_image(st[i, 0] - st[j, 0], 0, box_len, periodic)
+            dy = _min_image(st[i, 1] - st[j, 1], 1, box_len, periodic)
+            dz = _min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
+            dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if grav_on:
+                sleeper = _falls_asleep(i, j, dx / dist, dy / dist, dz / dist, st, mstate,
+                                        gravity, fsc[F_LANDING_SPEED])
+                if sleeper >= 0:
+                    # too slow an impact on a sphere at rest below it: the sphere stays on
+                    # its support (sleeping; see _falls_asleep), the support is not moved
+                    other = j if sleeper == i else i
+                    _fall_asleep(sleeper, other, flight, dyn, rotation)
+                    counter[sleeper] += 1
+                    _repredict_later(isc, sleeper)
+                    _repredict_later(isc, other)
+                    counts[EV_LAND] += 1
+                    if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, sleeper,
+                                       other, MS_REST, END_NONE):
+                        return STATUS_LOG_FULL
                     continue
-                _note_progress(i, t, st, zstreak)
-                _note_progress(j, t, st, zstreak)
-                _advance(st, i, t, gravity, grav_on)
-                _advance(st, j, t, gravity, grav_on)
-                dx = _min_image(st[i, 0] - st[j, 0], 0, box_len, periodic)
-                dy = _min_image(st[i, 1] - st[j, 1], 1, box_len, periodic)
-                dz = _min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
-                dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-                wi = omg[i] if rotation else omg[0]
-                wj = omg[j] if rotation else omg[0]
-                ri = st[i, S_R]
-                rj = st[j, S_R]
-                hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, dx / dist,
-                              dy / dist, dz / dist, inv_m[i], inv_m[j], inv_i[i], inv_i[j], ri,
-                              rj, 1.0 / ri + 1.0 / rj, pair_table[mat[i], mat[j]], rec,
-                              plasticity, friction, rolling, adhesion, rotation, False)
-                if not hit:
-                    # re-check failed: a grazing contact that round-off turned into "separating".
-                    # Nothing changed, so no counter moves; both re-predict from the exact contact
-                    # state, which no longer approaches. A loop of such retries is caught by the
-                    # collapse guard (MAX_ZERO_TIME_EVENTS).
-                    _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
-                    _reschedule(j, t, flight, walls, space, grid, sched, isc, grav_on)
-                    counts[EV_MISS] += 1
-                    if zstreak[i] > MAX_ZERO_TIME_EVENTS or zstreak[j] > MAX_ZERO_TIME_EVENTS:
-                        isc[I_COLLAPSED] = i
-                        return STATUS_COLLAPSE
-                    continue
-                counter[i] += 1
-                counter[j] += 1
-                _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
-                _reschedule(j, t, flight, walls, space, grid, sched, isc, grav_on)
-                other = j
-            elif kind == EV_WALL:
-                w = ev_partner[i]
-                _note_progress(i, t, st, zstreak)
-                _advance(st, i, t, gravity, grav_on)
-                wi = omg[i] if rotation else omg[0]
-                ri = st[i, S_R]
-                hit = resolve(st[i, S_V:S_V + 3], wi, planes_vel[w], planes_omg[w],
-                              planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_m[i], 0.0,
-                              inv_i[i], 0.0, ri, 0.0, 1.0 / ri,
-                              pair_table[mat[i], planes_mat[w]], rec, plasticity, friction,
-                              rolling, adhesion, rotation, False)
-                if not hit:
-                    # re-check failed (see the pair case)
-                    _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
-                    counts[EV_MISS] += 1
+                rest_i = mstate[i] == MS_REST
+                rest_j = mstate[j] == MS_REST
+            wi = omg[i] if rotation else omg[0]
+            wj = omg[j] if rotation else omg[0]
+            ri = st[i, S_R]
+            rj = st[j, S_R]
+            hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, dx / dist,
+                          dy / dist, dz / dist, inv_m[i], inv_m[j], inv_i[i], inv_i[j], ri,
+                          rj, 1.0 / ri + 1.0 / rj, pair_table[mat[i], mat[j]], rec,
+                          plasticity, friction, rolling, adhesion, rotation, False)
+            if not hit:
+                # re-check failed: a grazing contact that round-off turned into "separating".
+                # Nothing changed, so no counter moves; both re-predict from the exact contact
+                # state, which no longer approaches. A loop of such retries is caught by the
+                # collapse guard (MAX_ZERO_TIME_EVENTS).
+                _repredict_later(isc, i)
+                _repredict_later(isc, j)
+                counts[EV_MISS] += 1
+                if zstreak[i] > MAX_ZERO_TIME_EVENTS or zstreak[j] > MAX_ZERO_TIME_EVENTS:
+                    isc[I_COLLAPSED] = i
+                    return STATUS_COLLAPSE
+                continue
+            if grav_on:
+                if mstate[i] != MS_FLIGHT:
+                    _leave_plane(i, flight, dyn, gravity)
+                if mstate[j] != MS_FLIGHT:
+                    _leave_plane(j, flight, dyn, gravity)
+                # spheres asleep on a sphere that was at rest fall again
+                if rest_i:
+                    _wake_sleepers(i, t, flight, dyn, walls, space, grid, sched, isc,
+                                   grav_on, rotation)
+                if rest_j:
+                    _wake_sleepers(j, t, flight, dyn, walls, space, grid, sched, isc,
+                                   grav_on, rotation)
+            counter[i] += 1
+            counter[j] += 1
+            _repredict_later(isc, i)
+            _repredict_later(isc, j)
+            other = j
+        elif kind == EV_WALL:
+            w = np.int64(ev_partner[i])
+            _note_progress(i, t, st, zstreak)
+            _advance(st, acc, omg, alpha, i, t, grav_on, rotation)
+            if grav_on:
+                gn, vn = _pressed(i, w, st, walls, gravity)
+                if gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]:
+                    # too slow to bounce: it stays on the plane (MODEL §5.3; what is given
+                    # up is the rebound, at most ½ m v_land², see hsgran.scene)
+                    if mstate[i] != MS_FLIGHT:
+                        _leave_plane(i, flight, dyn, gravity)
+                    _enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table,
+                                 fsc, friction, rolling, rotation)
+                    counter[i] += 1
+                    _repredict_later(isc, i)
+                    counts[EV_LAND] += 1
                     if zstreak[i] > MAX_ZERO_TIME_EVENTS:
                         isc[I_COLLAPSED] = i
                         return STATUS_COLLAPSE
+                    if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, -1 - w,
+                                       mstate[i], END_NONE):
+                        return STATUS_LOG_FULL
                     continue
-                counter[i] += 1
-                _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
-                other = -1 - w
-            else:
-                # EV_CELL (EV_NONE has time NEVER and is never popped): move to the neighbouring
-                # cell; on a periodic axis wrap the stored state by one box length
-                code = ev_partner[i]
-                k = code // 2
-                step = 1 if code % 2 == 1 else -1
-                old = slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell)
-                c = cell[i, k] + step
-                if periodic[k]:
-                    if c >= ncell[k]:
-                        c = 0
-                        st[i, k] -= box_len[k]
-                    elif c < 0:
-                        c = ncell[k] - 1
-                        st[i, k] += box_len[k]
-                cell[i, k] = c
-                remove(i, old, head, nxt, prv)
-                insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
-                _reschedule(i, t, flight, walls, space, grid, sched, isc, grav_on)
-                counts[EV_CELL] += 1
+            wi = omg[i] if rotation else omg[0]
+            ri = st[i, S_R]
+            hit = resolve(st[i, S_V:S_V + 3], wi, planes_vel[w], planes_omg[w],
+                          planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_m[i], 0.0,
+                          inv_i[i], 0.0, ri, 0.0, 1.0 / ri,
+                          pair_table[mat[i], planes_mat[w]], rec, plasticity, friction,
+                          rolling, adhesion, rotation, False)
+            if not hit:
+                # re-check failed (see the pair case)
+                _repredict_later(isc, i)
+                counts[EV_MISS] += 1
+                if zstreak[i] > MAX_ZERO_TIME_EVENTS:
+                    isc[I_COLLAPSED] = i
+                    return STATUS_COLLAPSE
                 continue
-
-            # a collision was executed (pair or wall)
-            counts[kind] += 1
-            isc[I_N_EVENTS] += 1
-            executed += 1
-            fsc[F_DISSIPATED] += rec[REC_ENERGY_LOST]
-            if zstreak[i] > MAX_ZERO_TIME_EVENTS or (
-                    other >= 0 and zstreak[other] > MAX_ZERO_TIME_EVENTS):
+            if grav_on:
+                if mstate[i] != MS_FLIGHT:
+                    _leave_plane(i, flight, dyn, gravity)  # knocked off its plane
+                gn, vn = _pressed(i, w, st, walls, gravity)
+                if gn > 0.0 and vn <= fsc[F_LANDING_SPEED]:
+                    _enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table,
+                                 fsc, friction, rolling, rotation)
+                    counts[EV_LAND] += 1
+                    landed = True
+            counter[i] += 1
+            _repredict_later(isc, i)
+            other = -1 - w
+        elif grav_on and kind == EV_STATE:
+            # the on-plane motion segment ends: slide → roll, roll → rest, spin reversal
+            _note_progress(i, t, st, zstreak)
+            _advance(st, acc, omg, alpha, i, t, grav_on, rotation)
+            ended = ev_partner[i]
+            _enter_plane(i, np.int64(mplane[i]), t, np.int64(ended), flight, dyn, walls, gravity,
+                         pair_table, fsc, friction, rolling, rotation)
+            counter[i] += 1
+            _repredict_later(isc, i)
+            counts[EV_STATE] += 1
+            if zstreak[i] > MAX_ZERO_TIME_EVENTS:
                 isc[I_COLLAPSED] = i
                 return STATUS_COLLAPSE
-            if log_on:
-                m = isc[I_N_LOG]
-                log_f[m, 0] = t
-                log_f[m, 1] = rec[REC_J_N]
-                log_f[m, 2] = rec[REC_J_T]
-                log_f[m, 3] = rec[REC_E_N]
-                log_i[m, 0] = kind
-                log_i[m, 1] = i
-                log_i[m, 2] = other
-                log_i[m, 3] = int(rec[REC_STAGE])
-                log_i[m, 4] = int(rec[REC_REGIME])
-                isc[I_N_LOG] = m + 1
-                if m + 1 == log_f.shape[0]:
-                    return STATUS_LOG_FULL
-            if executed >= max_events:
-                return STATUS_BUDGET
+            if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_STATE, i, -1 - mplane[i],
+                               mstate[i], ended):
+                return STATUS_LOG_FULL
+            continue
+        else:
+            # EV_CELL (EV_NONE has time NEVER and is never popped): move to the neighbouring
+            # cell; on a periodic axis wrap the stored state by one box length
+            code = ev_partner[i]
+            k = code // 2
+            step = 1 if code % 2 == 1 else -1
+            old = slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell)
+            c = cell[i, k] + step
+            if periodic[k]:
+                if c >= ncell[k]:
+                    c = 0
+                    st[i, k] -= box_len[k]
+                elif c < 0:
+                    c = ncell[k] - 1
+                    st[i, k] += box_len[k]
+            cell[i, k] = c
+            remove(i, old, head, nxt, prv)
+            insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
+            _repredict_later(isc, i)
+            counts[EV_CELL] += 1
+            continue
 
-    return init, run_loop
+        # a collision was executed (pair or wall)
+        counts[kind] += 1
+        isc[I_N_EVENTS] += 1
+        executed += 1
+        fsc[F_DISSIPATED] += rec[REC_ENERGY_LOST]
+        if zstreak[i] > MAX_ZERO_TIME_EVENTS or (
+                other >= 0 and zstreak[other] > MAX_ZERO_TIME_EVENTS):
+            isc[I_COLLAPSED] = i
+            return STATUS_COLLAPSE
+        if log_on:
+            full = _log(out, isc, t, rec[REC_J_N], rec[REC_J_T], rec[REC_E_N], kind, i,
+                        other, int(rec[REC_STAGE]), int(rec[REC_REGIME]))
+            if landed:
+                # the rebound was too slow: the sphere stays on the plane from now on
+                full = full or _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, other,
+                                    mstate[i], END_NONE)
+            if full:
+                return STATUS_LOG_FULL
+        if executed >= max_events:
+            return STATUS_BUDGET
+

@@ -32,6 +32,7 @@ from hsgran.errors import HsgranError
 from hsgran.events.grid import cell_coordinates, insert, plan_grid, slot_of
 from hsgran.events.queue import new_heap
 from hsgran.materials import SOLID_SPHERE_INERTIA
+from hsgran.onplane import CONVENTION_A, CONVENTION_B
 
 #: Bytes of frame buffer the engine may hold; frames are handed to observers when it is full.
 FRAME_BUFFER_BYTES = 32 * 2**20
@@ -67,14 +68,14 @@ class EventBlock:
     """Executed collisions (the event log)."""
 
     time: np.ndarray  #: [s]
-    kind: np.ndarray  #: 1 pair, 2 wall
+    kind: np.ndarray  #: 1 pair, 2 wall, 7 motion-state change, 8 landing on a plane
     i: np.ndarray  #: sphere index
     j: np.ndarray  #: partner sphere, or −1 − w for plane w
     normal_impulse: np.ndarray  #: J_n [N s]
     tangential_impulse: np.ndarray  #: J_t [N s]
     e_n: np.ndarray  #: normal restitution [-]
-    stage: np.ndarray  #: normal-model stage code
-    regime: np.ndarray  #: tangential regime code
+    stage: np.ndarray  #: normal-model stage code (kinds 7, 8: the new motion state)
+    regime: np.ndarray  #: tangential regime code (kinds 7, 8: what ended the last segment)
 
 
 @dataclass
@@ -95,8 +96,6 @@ class RunSummary:
                 f"{self.events_per_second:,.0f} events/s"]
 
 
-_LOOPS: dict = {}
-
 #: Cache-line size [bytes] to which the per-sphere rows are aligned.
 CACHE_LINE = 64
 
@@ -107,13 +106,6 @@ def _aligned_rows(n: int, width: int) -> np.ndarray:
     buf = np.zeros(n * width + pad)
     off = (-buf.ctypes.data % CACHE_LINE) // 8
     return buf[off:off + n * width].reshape(n, width)
-
-
-def _compiled(flags):
-    """(init, loop) compiled for one combination of effect and engine flags (memoised)."""
-    if flags not in _LOOPS:
-        _LOOPS[flags] = ev.build(*flags)
-    return _LOOPS[flags]
 
 
 class Simulation:
@@ -136,8 +128,12 @@ class Simulation:
         self.n = n
         self.rotation = bool(eff.rotation)
         self.log_events = bool(log_events)
-        self._flags = (bool(eff.plasticity), bool(eff.friction), bool(eff.rolling_resistance),
-                       bool(eff.adhesion), self.rotation, bool(eff.gravity), self.log_events)
+        self.flags = np.zeros(ev.FL_SIZE, dtype=np.bool_)
+        for k, on in ((ev.FL_PLASTICITY, eff.plasticity), (ev.FL_FRICTION, eff.friction),
+                      (ev.FL_ROLLING, eff.rolling_resistance), (ev.FL_ADHESION, eff.adhesion),
+                      (ev.FL_ROTATION, eff.rotation), (ev.FL_GRAVITY, eff.gravity),
+                      (ev.FL_LOG, self.log_events)):
+            self.flags[k] = bool(on)
         self.gravity = np.ascontiguousarray(scene.gravity, dtype=np.float64)
         # one 64-byte row per sphere: position, velocity, local time, radius (hsgran._loop S_*)
         self.state = _aligned_rows(n, ev.S_WIDTH)
@@ -156,6 +152,15 @@ class Simulation:
         self.mat = np.ascontiguousarray(scene.material, dtype=np.int32)
         self.counter = np.zeros(n, dtype=np.int64)
         self.zstreak = np.zeros(n, dtype=np.int32)
+        # motion states (hsgran.onplane): only with gravity can a sphere rest on a plane
+        ng = n if eff.gravity else 1
+        self.acc = np.tile(self.gravity, (ng, 1))
+        self.alpha = np.zeros((ng if self.rotation else 1, 3))
+        self.mstate = np.zeros(ng, dtype=np.int8)
+        self.mplane = np.full(ng, -1, dtype=np.int32)
+        self.seg_end = np.full(ng, np.inf)
+        self.seg_code = np.zeros(ng, dtype=np.int8)
+        self.seg_dir = np.zeros((ng, 3))
         self.pair_table = np.ascontiguousarray(scene.pair_table())
         planes = list(scene.planes)
         self.planes_p = np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3)
@@ -195,8 +200,11 @@ class Simulation:
         self.heap, self.where, self.key_t, self.key_s = new_heap(n + 1)
         self.fsc = np.zeros(ev.F_SIZE)
         self.fsc[ev.F_FRAME_DT] = scene.frame_interval
+        self.fsc[ev.F_LANDING_SPEED] = scene.landing_speed
+        self.fsc[ev.F_CHI] = (CONVENTION_A if scene.rolling_convention == "A" else CONVENTION_B)
         self.isc = np.zeros(ev.I_SIZE, dtype=np.int64)
         self.isc[ev.I_COLLAPSED] = -1
+        self.isc[ev.I_PEND_A] = self.isc[ev.I_PEND_B] = -1
         self.counts = np.zeros(len(ev.EVENT_NAMES), dtype=np.int64)
         self.rec = np.zeros(REC_SIZE)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2))
@@ -210,7 +218,6 @@ class Simulation:
         self.log_f = np.zeros((nl, 4))
         self.log_i = np.zeros((nl, 5), dtype=np.int64)
         self._frames_emitted = 0
-        self._init, self._loop = _compiled(self._flags)
         # the frame tick at t = 0 goes first among simultaneous entries (lowest sequence number)
         self.ev_t[n] = 0.0
         self.ev_seq[n] = 0
@@ -218,20 +225,22 @@ class Simulation:
         # the array groups of hsgran._loop (see its module notes); the tuples hold references,
         # so the compiled code updates these arrays in place
         self._groups = (
-            (self.state, self.counter),
-            (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak),
+            (self.state, self.counter, self.acc, self.mstate, self.mplane, self.seg_end,
+             self.seg_code),
+            (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak, self.alpha, self.seg_dir),
             (self.planes_p, self.planes_n, self.planes_mat, self.planes_vel, self.planes_omg),
             (self.gravity, self.box_len, self.periodic),
             (self.origin, self.csize, self.ncell, self.cell, self.head, self.nxt, self.prv,
              np.zeros(27, dtype=np.int32), np.zeros((27, 3)), np.zeros((3, 3), dtype=np.int64),
-             np.zeros((3, 3))),
+             np.zeros((3, 3)), np.zeros(n if eff.gravity else 1, dtype=np.int32)),
             (self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount, self.heap,
              self.where, self.key_t, self.key_s),
             (self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.fr_diss, self.log_f,
              self.log_i),
         )
-        flight, _, walls, space, grid, sched, _ = self._groups
-        self._init(flight, walls, space, grid, sched, self.isc)
+        flight, dyn, walls, space, grid, sched, _ = self._groups
+        ev.init(flight, dyn, walls, space, grid, sched, self.pair_table, self.fsc, self.isc,
+                self.flags)
 
         # compile (or load from the cache) now, so run() times only the run: with t_end < 0
         # the loop returns before touching any event
@@ -251,12 +260,12 @@ class Simulation:
     def state_at(self, t: float):
         """Positions [m] and velocities [m/s] of all spheres at time ``t`` ≥ the last event."""
         dt = (t - self.t_loc)[:, None]
-        g = self.gravity[None, :]
+        g = self.acc if self.scene.effects.gravity else self.gravity[None, :]
         return self.pos + dt * (self.vel + 0.5 * g * dt), self.vel + g * dt
 
     def _call(self, max_events: int) -> int:
-        return self._loop(*self._groups, self.pair_table, self.fsc, self.isc, self.counts,
-                          max_events, self.rec)
+        return ev.run_loop(*self._groups, self.pair_table, self.fsc, self.isc, self.counts,
+                           max_events, self.rec, self.flags)
 
     def _frame_block(self) -> FrameBlock | None:
         f = int(self.isc[ev.I_N_FRAMES])

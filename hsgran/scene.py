@@ -137,7 +137,17 @@ RSA_JAMMING_FRACTION = 0.38
 
 AXES = "xyz"
 
-TOP_KEYS = ("scene", "output", "materials", "contacts", "walls", "particles", "fill")
+TOP_KEYS = ("scene", "output", "materials", "contacts", "walls", "particles", "fill",
+            "enduring_contact")
+ENDURING_KEYS = ("landing_speed", "rolling_convention")
+#: Default rebound speed [m/s] below which a sphere bouncing on a plane stays on it (sliding,
+#: rolling or resting, MODEL §5.3). Such a rebound would rise v²/2g = 51 nm, below any surface
+#: roughness; giving it up costs at most ½ m v² of kinetic energy and the remaining bounces'
+#: time 2v/(g(1 − e)) (1 ms at e = 0.8), both reported in docs/enduring-contact.md.
+DEFAULT_LANDING_SPEED = 1e-3
+#: Rolling-friction conventions of MODEL §5.3: does the rolling torque act while sliding?
+ROLLING_CONVENTIONS = {"A": "rolling torque also while sliding",
+                       "B": "rolling torque only while rolling"}
 SCENE_KEYS = ("name", "duration", "gravity", "effects", "seed", "periodic")
 OUTPUT_KEYS = ("frame_interval",)
 PLANE_KEYS = ("kind", "point", "normal", "material")
@@ -194,6 +204,9 @@ class Scene:
         material: Material id of each sphere, shape (N,), int64.
         text: The scene file's text, verbatim.
         source: The file's path, or ``"<string>"``.
+        landing_speed: Rebound speed [m/s] below which a sphere stays on a plane.
+        rolling_convention: "A" (rolling torque also while sliding) or "B" (only while
+            rolling), MODEL §5.3.
     """
 
     name: str
@@ -215,6 +228,8 @@ class Scene:
     material: np.ndarray
     text: str = ""
     source: str = "<string>"
+    landing_speed: float = DEFAULT_LANDING_SPEED
+    rolling_convention: str = "A"
 
     @property
     def n(self) -> int:
@@ -388,6 +403,7 @@ class _SceneBuilder:
         _check_keys(doc, TOP_KEYS, "")
         self._parse_scene_table()
         self._parse_output()
+        self._parse_enduring()
         self.library.add_tables(doc, origin=self.source)
         self._parse_walls()
         particles = self._parse_particles()
@@ -458,6 +474,8 @@ class _SceneBuilder:
             material=np.ascontiguousarray(material, dtype=np.int64),
             text=self.text,
             source=self.source,
+            landing_speed=self.landing_speed,
+            rolling_convention=self.rolling_convention,
         )
 
     # -- [scene] and [output] --
@@ -490,6 +508,21 @@ class _SceneBuilder:
             raise InputError(f"must be a list of 3 booleans [x, y, z], got {short_repr(periodic)}",
                              "scene.periodic")
         self.periodic = tuple(periodic)
+
+    def _parse_enduring(self) -> None:
+        tab = _table(self.doc.get("enduring_contact", {}), "enduring_contact",
+                     "a table ([enduring_contact])")
+        _check_keys(tab, ENDURING_KEYS, "enduring_contact")
+        self.landing_speed = DEFAULT_LANDING_SPEED
+        if "landing_speed" in tab:
+            self.landing_speed = check_positive(tab["landing_speed"],
+                                                "enduring_contact.landing_speed", "m/s")
+        conv = tab.get("rolling_convention", "A")
+        if conv not in ROLLING_CONVENTIONS:
+            raise InputError(f"must be \"A\" ({ROLLING_CONVENTIONS['A']}) or \"B\" "
+                             f"({ROLLING_CONVENTIONS['B']}), got {short_repr(conv)}",
+                             "enduring_contact.rolling_convention")
+        self.rolling_convention = conv
 
     def _parse_output(self) -> None:
         out = _table(self.doc.get("output", {}), "output", "a table ([output])")

@@ -20,6 +20,7 @@ LAYERS = {
     "_loop": 5,
     "contact.": 2,
     "motion": 2,
+    "onplane": 2,
     "events.": 3,
     "impact": 4,
     "scene": 4,

@@ -20,7 +20,7 @@ SHORT = 0.01
 
 def test_the_issue_scenarios_are_shipped():
     names = {p.stem for p in SCENARIOS}
-    assert {"steel_ball_on_glass", "granular_gas", "falling_box"} <= names
+    assert {"steel_ball_on_glass", "granular_gas", "falling_box", "sphere_on_plate"} <= names
 
 
 @pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)

@@ -3,8 +3,10 @@
 :func:`resolve` is the compiled kernel: it takes the two bodies' velocities and spins (updated
 in place), the contact normal, inverse masses and inertias, lever arms, the pair row, a record
 array, and the effect flags. :func:`make_resolver` closes over an :class:`~hsgran.effects.Effects`
-value so the flags are compile-time constants: a disabled effect's code is compiled away and
-costs nothing per event (``tools/bench_contact.py`` measures it).
+value so the flags are compile-time constants: a disabled effect's code is compiled away. The
+event loop (hsgran._loop) instead passes the flags as run-time switches, so that one compiled
+loop serves every scene: a disabled effect then costs one predictable branch and its code
+never runs. ``tools/bench_contact.py`` measures both.
 
 Order (MODEL.md §6): relative contact velocity → normal model (fixed restitution, or elastic
 Hertz, or the staged model; then adhesion in recovery) → rolling couple → tangential impulse
@@ -17,6 +19,7 @@ wall has a velocity but no spin.
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
@@ -312,7 +315,7 @@ def _resolve_batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i
     return hit
 
 
-def make_batch_resolver(effects: Effects, diagnostics: bool = False):
+def make_batch_resolver(effects: Effects, diagnostics: bool = False, switched: bool = False):
     """Compiled loop applying :func:`resolve` to many independent collisions.
 
     Returns:
@@ -321,8 +324,14 @@ def make_batch_resolver(effects: Effects, diagnostics: bool = False):
         of shape (P, PAIR_ROW_SIZE), ``pair_index`` int64 (K,), ``recs`` (K, REC_SIZE)); the
         state arrays are updated in place. ``omg1``/``omg2`` may be (K, 3) zeros without
         rotation. Used by the benchmark and by validation sweeps.
+
+        With ``switched`` the flags are run-time arguments of one compiled loop, as in the
+        event loop, instead of compile-time constants.
     """
     key = _flags(effects, diagnostics)
+    if switched:
+        return partial(_batch_switched, plasticity=key[0], friction=key[1], rolling=key[2],
+                       adhesion=key[3], rotation=key[4], diagnostics=key[5])
     if key not in _BATCHES:
         PL, FR, RO, AD, ROT, DG = key
 
@@ -334,6 +343,15 @@ def make_batch_resolver(effects: Effects, diagnostics: bool = False):
 
         _BATCHES[key] = batch
     return _BATCHES[key]
+
+
+@njit
+def _batch_switched(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2,
+                    curv, rows, pair_index, recs, plasticity, friction, rolling, adhesion,
+                    rotation, diagnostics):
+    return _resolve_batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2,
+                          curv, rows, pair_index, recs, plasticity, friction, rolling, adhesion,
+                          rotation, diagnostics)
 
 
 def new_record() -> np.ndarray:

@@ -1,0 +1,272 @@
+"""Enduring contact on a plane: sliding, rolling, rest, inclines, and bouncing that ends on the
+plate (issue: sliding, rolling and resting; MODEL.md §5.3)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hsgran.engine import Simulation
+from hsgran.onplane import END_SLIP, END_STOP, MS_REST, MS_ROLLING, MS_SLIDING
+from hsgran.refdata import read_csv
+from hsgran.scene import parse_scene
+
+#: Engine vs closed form evaluated here: both are the same algebra in a different order, so
+#: they agree to rounding (measured ≤ 3e-15 relative); 1e-9 is the issue's bound.
+CLOSED_FORM_RTOL = 1e-9
+#: The shipped table has 6 significant digits: half a unit of the 6th digit, relative to the
+#: smallest tabulated value's leading digit (0.031205 → 5e-7 / 0.031 = 1.6e-5).
+TABLE_RTOL = 2e-5
+K = 0.4  #: I/(m R²) of a solid sphere
+
+PLATE = """
+[scene]
+name = "sphere on plate"
+duration = {duration}
+gravity = [0.0, 0.0, {gz}]
+effects = ["gravity", "rotation", "friction", "rolling_resistance"]
+[output]
+frame_interval = {frame}
+[enduring_contact]
+rolling_convention = "{conv}"
+[materials.m]
+density = 7800.0
+youngs_modulus = 200e9
+poisson_ratio = 0.3
+[[contacts]]
+between = ["m", "m"]
+sliding_friction = {mu_s}
+rolling_friction = {mu_r}
+[[walls]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [{nx}, 0.0, {nz}]
+material = "m"
+[[particles]]
+material = "m"
+radius = {r}
+position = [{px}, 0.0, {pz}]
+velocity = [{vx}, 0.0, {vz}]
+angular_velocity = [0.0, {omega}, 0.0]
+"""
+
+
+def plate_scene(v0, omega0, r, mu_s, mu_r, g, conv, duration=None):
+    """Sphere on a horizontal plate moving along +x; omega0 > 0 is forward (topspin) roll:
+    rolling forwards along +x with a +z normal means ω along +y with v = R ω."""
+    return parse_scene(PLATE.format(
+        duration=duration or 100.0, gz=-g, frame=duration or 100.0, conv=conv, mu_s=mu_s,
+        mu_r=mu_r, nx=0.0, nz=1.0, r=r, px=0.0, pz=r, vx=v0, vz=0.0, omega=omega0))
+
+
+class Keep:
+    def __init__(self):
+        self.events = []
+
+    def on_events(self, b):
+        self.events.append(b)
+
+    def log(self, name):
+        return np.concatenate([getattr(b, name) for b in self.events])
+
+
+def run_plate(scene):
+    """(slide-end time, speed at roll start, slide distance, stop time, stop distance)."""
+    keep = Keep()
+    Simulation(scene, log_events=True).run(observers=[keep])
+    t, stage, regime = keep.log("time"), keep.log("stage"), keep.log("regime")
+    rolls = np.flatnonzero((stage == MS_ROLLING) & (regime == END_SLIP))
+    rests = np.flatnonzero(stage == MS_REST)
+    assert len(rolls) == 1
+    assert len(rests) == 1
+    t1, t2 = t[rolls[0]], t[rests[0]]
+    sim = Simulation(scene)
+    sim.run(until=t1)
+    x1, v1 = sim.pos[0, 0], sim.vel[0, 0]
+    assert sim.mstate[0] == MS_ROLLING
+    sim.run()
+    assert sim.mstate[0] == MS_REST
+    np.testing.assert_array_equal(sim.vel[0], 0.0)
+    np.testing.assert_allclose(sim.pos[0, 2], scene.radius[0], rtol=1e-15)
+    return t1, v1, x1, t2, sim.pos[0, 0]
+
+
+def closed_form(v0, omega0, r, mu_s, mu_r, g, conv):
+    """MODEL.md §5.3, phases 1 and 2, for a launch with u0 = v0 − R Ω0 > 0."""
+    chi = 1.0 if conv == "A" else 0.0
+    u0 = v0 - r * omega0
+    assert u0 > 0
+    if omega0 < 0 and chi:
+        # backspin, convention A: the rolling torque helps until the spin passes zero
+        t1 = (u0 - 2 * mu_r * r * abs(omega0) / (mu_s + mu_r)) / (g * (3.5 * mu_s - 2.5 * mu_r))
+    else:
+        t1 = u0 / (g * (3.5 * mu_s - 2.5 * chi * mu_r))
+    v1 = v0 - mu_s * g * t1
+    x1 = v0 * t1 - mu_s * g * t1**2 / 2
+    t2 = v1 * (1 + K) / (mu_r * g)
+    x2 = v1**2 * (1 + K) / (2 * mu_r * g)
+    return t1, v1, x1, t1 + t2, x1 + x2
+
+
+@pytest.mark.parametrize("row", range(8))
+def test_sphere_on_plate_reproduces_the_shipped_closed_form_table(row):
+    tab = read_csv("derived_sphere_on_plate_closed_form.csv")
+    conv = tab["convention"][row][0]
+    args = (tab["v0_m_s"][row], tab["omega0_rad_s"][row], tab["radius_m"][row],
+            tab["mu_s"][row], tab["mu_r_dimensionless"][row], tab["g_m_s2"][row])
+    got = run_plate(plate_scene(*args, conv))
+    want = [tab[k][row] for k in ("t_slide_end_s", "v_at_roll_start_m_s", "x_slide_m",
+                                  "t_stop_s", "x_stop_m")]
+    np.testing.assert_allclose(got, want, rtol=TABLE_RTOL)
+
+
+CASES = [
+    # v0, Ω0 (+ topspin, − backspin), R, μ_s, μ_r, g
+    (1.0, 0.0, 0.01, 0.3, 0.01, 9.81),
+    (2.5, -150.0, 0.005, 0.4, 0.02, 9.81),  # backspin
+    (0.8, 40.0, 0.01, 0.25, 0.005, 9.81),  # topspin, still slipping forwards
+    (0.3, -5.0, 0.02, 0.6, 0.1, 3.7),  # backspin on another planet
+]
+
+
+@pytest.mark.parametrize("conv", ["A", "B"])
+@pytest.mark.parametrize("case", CASES, ids=["plain", "backspin", "topspin", "mars"])
+def test_sphere_on_plate_equals_the_closed_form_to_1e9(case, conv):
+    got = run_plate(plate_scene(*case, conv))
+    np.testing.assert_allclose(got, closed_form(*case, conv), rtol=CLOSED_FORM_RTOL)
+
+
+def incline(theta_deg, mu_s, mu_r, v0=0.0):
+    """A sphere touching a plane tilted by θ about y (the fall line is +x), started with speed
+    v0 along the fall line, rolling (no slip) if it moves."""
+    th = math.radians(theta_deg)
+    n = (math.sin(th), 0.0, math.cos(th))  # normal tilted towards +x: downhill is +x
+    r = 0.01
+    v = (v0 * math.cos(th), 0.0, -v0 * math.sin(th))
+    omega = v0 / r
+    return parse_scene(PLATE.format(
+        duration=0.5, gz=-9.81, frame=0.05, conv="A", mu_s=mu_s, mu_r=mu_r, nx=n[0], nz=n[2],
+        r=r, px=r * n[0], pz=r * n[2], vx=v[0], vz=v[2], omega=omega)), th
+
+
+def distance_along_fall_line(sim, scene, th, t):
+    pos, _ = sim.state_at(t)
+    d = pos[0] - scene.position[0]
+    return d[0] * math.cos(th) - d[2] * math.sin(th)
+
+
+@pytest.mark.parametrize("theta", [5.0, 20.0, 40.0])
+def test_incline_rolls_at_five_sevenths_g_sin_theta_below_the_slip_angle(theta):
+    mu_s = 0.3  # rolls while tan θ ≤ 3.5 μ_s = 1.05 (θ ≤ 46.4°)
+    scene, th = incline(theta, mu_s, 0.0)
+    sim = Simulation(scene)
+    assert sim.mstate[0] == MS_ROLLING
+    sim.run(until=0.5)
+    a = 5.0 / 7.0 * 9.81 * math.sin(th)
+    got = distance_along_fall_line(sim, scene, th, 0.5)
+    np.testing.assert_allclose(got, 0.5 * a * 0.5**2, rtol=CLOSED_FORM_RTOL)
+    # no slip: ω R equals the speed
+    _, vel = sim.state_at(0.5)
+    np.testing.assert_allclose(np.linalg.norm(vel[0]), a * 0.5, rtol=CLOSED_FORM_RTOL)
+
+
+@pytest.mark.parametrize("theta", [50.0, 70.0])
+def test_incline_slides_above_the_slip_angle(theta):
+    mu_s = 0.3
+    scene, th = incline(theta, mu_s, 0.0)
+    sim = Simulation(scene)
+    assert sim.mstate[0] == MS_SLIDING
+    sim.run(until=0.5)
+    a = 9.81 * (math.sin(th) - mu_s * math.cos(th))
+    got = distance_along_fall_line(sim, scene, th, 0.5)
+    np.testing.assert_allclose(got, 0.5 * a * 0.5**2, rtol=CLOSED_FORM_RTOL)
+
+
+def test_slip_angle_boundary_is_tan_theta_equals_seven_halves_mu_s():
+    mu_s = 0.2
+    boundary = math.degrees(math.atan(3.5 * mu_s))
+    below, _ = incline(boundary - 0.01, mu_s, 0.0)
+    above, _ = incline(boundary + 0.01, mu_s, 0.0)
+    assert Simulation(below).mstate[0] == MS_ROLLING
+    assert Simulation(above).mstate[0] == MS_SLIDING
+
+
+def test_rolling_friction_holds_a_sphere_on_a_gentle_slope():
+    mu_r = 0.05  # holds while tan θ ≤ μ_r (θ ≤ 2.86°)
+    held, _ = incline(2.5, 0.3, mu_r)
+    sim = Simulation(held)
+    assert sim.mstate[0] == MS_REST
+    sim.run()
+    np.testing.assert_array_equal(sim.pos[0], held.position[0])
+    rolls, _ = incline(3.5, 0.3, mu_r)
+    assert Simulation(rolls).mstate[0] == MS_ROLLING
+
+
+def test_sphere_rolling_uphill_stops_and_rolls_back_down():
+    mu_r = 0.01
+    theta = 10.0
+    scene, th = incline(theta, 0.3, mu_r, v0=-0.5)  # launched uphill, rolling
+    keep = Keep()
+    sim = Simulation(scene, log_events=True)
+    sim.run(observers=[keep])
+    g = 9.81
+    decel = (g * math.sin(th) + mu_r * g * math.cos(th)) / (1 + K)
+    t_stop = 0.5 / decel
+    stops = keep.log("time")[keep.log("regime") == END_STOP]
+    np.testing.assert_allclose(stops[0], t_stop, rtol=CLOSED_FORM_RTOL)
+    accel = (g * math.sin(th) - mu_r * g * math.cos(th)) / (1 + K)
+    want = -0.5 * t_stop / 2 + 0.5 * accel * (0.5 - t_stop) ** 2
+    np.testing.assert_allclose(distance_along_fall_line(sim, scene, th, 0.5), want,
+                               rtol=CLOSED_FORM_RTOL)
+
+
+BOUNCE = """
+[scene]
+name = "dropped ball"
+duration = 8.0
+gravity = [0.0, 0.0, -9.81]
+effects = ["gravity", "rotation", "friction", "rolling_resistance"]
+[output]
+frame_interval = 0.1
+[enduring_contact]
+landing_speed = {landing}
+[materials.m]
+density = 7800.0
+youngs_modulus = 200e9
+poisson_ratio = 0.3
+[[contacts]]
+between = ["m", "m"]
+restitution = {e}
+sliding_friction = 0.3
+rolling_friction = 0.01
+[[walls]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+material = "m"
+[[particles]]
+material = "m"
+radius = 0.005
+position = [0.0, 0.0, {h}]
+"""
+
+
+@pytest.mark.parametrize("e", [0.5, 0.8, 0.95])
+def test_dropped_ball_comes_to_rest_after_the_geometric_series_of_bounces(e):
+    h, g, landing = 0.1, 9.81, 1e-3
+    scene = parse_scene(BOUNCE.format(e=e, h=h + 0.005, landing=landing))
+    keep = Keep()
+    sim = Simulation(scene, log_events=True)
+    summary = sim.run(observers=[keep])
+    assert sim.mstate[0] == MS_REST
+    kinds = keep.log("kind")
+    assert kinds[-1] == 8  # landed
+    t_land = keep.log("time")[-1]
+    # bounces until the rebound speed e^k v0 falls below the landing speed
+    v0 = math.sqrt(2 * g * h)
+    n_bounces = math.ceil(math.log(landing / v0) / math.log(e))
+    assert summary.collisions <= n_bounces + 1
+    # geometric series: all infinitely many bounces end at t_fall + 2 e v0 / (g (1 − e));
+    # landing early gives up at most the remaining bounces, 2 v_land / (g (1 − e))
+    t_inf = math.sqrt(2 * h / g) + 2 * e * v0 / (g * (1 - e))
+    assert t_inf - 2 * landing / (g * (1 - e)) <= t_land <= t_inf
