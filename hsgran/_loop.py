@@ -36,7 +36,7 @@ from hsgran.contact.model import (
 )
 from hsgran.events.grid import insert, remove, slot_of
 from hsgran.events.queue import heap_build, heap_update
-from hsgran.materials import P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
+from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import (
     NEVER,
     face_exit_time,
@@ -56,7 +56,10 @@ EV_STALE = 5  #: (counter only) popped pair events dropped because the partner c
 EV_MISS = 6  #: (counter only) popped collisions whose bodies were found not approaching
 EV_STATE = 7  #: a sphere's on-plane motion segment ends (slide → roll, roll → rest, …)
 EV_LAND = 8  #: (counter only) a sphere reached a plane too slowly to bounce and stays on it
-EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss", "state", "land")
+EV_TC = 9  #: (counter only) collisions made elastic by the TC model (see F_TC_TIME)
+EV_HOP = 10  #: (counter only) pair collisions executed as a hop (see _hop)
+EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss", "state", "land", "tc",
+               "hop")
 
 # float scalars
 F_T_CUR = 0  #: time of the last popped event [s]
@@ -65,7 +68,11 @@ F_FRAME_DT = 2  #: frame interval [s]
 F_DISSIPATED = 3  #: kinetic energy dissipated by collisions so far [J]
 F_LANDING_SPEED = 4  #: rebound speed below which a sphere stays on a plane [m/s]
 F_CHI = 5  #: rolling-torque convention while sliding (hsgran.onplane CONVENTION_A/_B)
-F_SIZE = 6
+#: TC model (Luding & McNamara 1998) [s]: a collision of a sphere less than this after its
+#: previous collision is elastic (e_n = 1; friction still acts), which ends the infinite
+#: sequences of ever-smaller collisions of inelastic collapse in clusters; 0 turns it off
+F_TC_TIME = 6
+F_SIZE = 7
 # int scalars
 I_SEQ = 0  #: next sequence number (tie-break)
 I_N_FRAMES = 1  #: frames in the buffer
@@ -121,9 +128,10 @@ S_WIDTH = 8
 #            what a prediction needs of every sphere: the 64-byte rows, the event counters and,
 #            with gravity, each sphere's acceleration [m/s²], motion state (hsgran.onplane MS_*),
 #            plane, and the end time [s] and kind (END_*) of its on-plane motion segment
-#   dyn    = (omg, inv_m, inv_i, mat, zstreak, alpha, seg_dir)
+#   dyn    = (omg, inv_m, inv_i, mat, zstreak, alpha, seg_dir, t_last, row_tc)
 #            what a collision needs in addition; alpha [rad/s²] and seg_dir (the direction the
-#            segment's end refers to) only with gravity
+#            segment's end refers to) only with gravity; t_last: time of each sphere's last
+#            collision [s] (TC model); row_tc: scratch pair row for an elastic TC collision
 # Without gravity acc, mstate, mplane, seg_end, seg_code, alpha and seg_dir are 1-row dummies.
 #   walls  = (planes_p, planes_n, planes_mat, planes_vel, planes_omg)
 #   space  = (gravity, box_len, periodic)
@@ -438,15 +446,27 @@ def _enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, fr
 SUPPORT_COS = 0.5
 
 
+@njit(inline="always")
+def _can_support(p, st, mstate, mplane, v_sleep):
+    """Sphere p can carry a sleeper: at rest (on a plane or asleep itself), or on a plane and
+    slower than ``v_sleep`` (it is then brought to rest first)."""
+    if mstate[p] == MS_REST:
+        return True
+    if mstate[p] == MS_FLIGHT or mplane[p] < 0:
+        return False
+    return st[p, 3] ** 2 + st[p, 4] ** 2 + st[p, 5] ** 2 <= v_sleep * v_sleep
+
+
 @njit
-def _falls_asleep(i, j, nx, ny, nz, st, mstate, gravity, v_sleep):
+def _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_sleep):
     """Which of i, j (n = unit vector from j to i) falls asleep on the other, or −1.
 
-    A sphere falls asleep when it meets a sphere at rest (on a plane or itself asleep) from
-    above, with a relative speed at most ``v_sleep`` (the landing speed): what a collision
-    would have done is a rebound slower than that. This is hsgran's remedy for sphere–sphere
-    inelastic collapse in piles [OURS, after DynamO's sleeping particles]; it gives up at most
-    ½ m v_sleep² per sleeper, and the support is not pushed."""
+    A sphere falls asleep when it meets from above a sphere that is at rest (on a plane or
+    itself asleep), or on a plane and slower than ``v_sleep`` (the landing speed), with a
+    relative speed at most ``v_sleep``: what a collision would have done is a rebound slower
+    than that. This is hsgran's remedy for sphere–sphere inelastic collapse in piles [OURS,
+    after DynamO's sleeping particles]; it gives up at most ½ m v_sleep² per sphere stopped,
+    and the support is not pushed."""
     g = math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
     if g == 0.0:
         return -1
@@ -456,9 +476,11 @@ def _falls_asleep(i, j, nx, ny, nz, st, mstate, gravity, v_sleep):
     dvz = st[i, 5] - st[j, 5]
     if dvx * dvx + dvy * dvy + dvz * dvz > v_sleep * v_sleep:
         return -1
-    if mstate[j] == MS_REST and mstate[i] != MS_REST and up >= SUPPORT_COS:
+    if (mstate[i] != MS_REST and up >= SUPPORT_COS
+            and _can_support(j, st, mstate, mplane, v_sleep)):
         return i
-    if mstate[i] == MS_REST and mstate[j] != MS_REST and -up >= SUPPORT_COS:
+    if (mstate[j] != MS_REST and -up >= SUPPORT_COS
+            and _can_support(i, st, mstate, mplane, v_sleep)):
         return j
     return -1
 
@@ -511,6 +533,139 @@ def _wake_sleepers(s, t, flight, dyn, walls, space, grid, sched, isc, grav_on, r
                             stack[top] = q
                             top += 1
                         q = np.int64(nxt[q])
+
+
+#: Two spheres pressed into planes with support cosines c_i, c_j both ~1 (c_i² + c_j² ≥ 2 − this)
+#: would have no mobility along the contact normal: then neither is treated as backed.
+SUPPORT_EPS = 1e-9
+
+
+@njit(inline="always")
+def _support_normal(p, st, mstate, mplane, planes_n, box_len, periodic):
+    """Unit normal N [-] of what backs sphere p: its plane's normal, or, for a sphere asleep on
+    sphere b, the direction from b to p; (0, 0, 0) for a sphere in flight."""
+    if mstate[p] == MS_FLIGHT:
+        return 0.0, 0.0, 0.0
+    w = mplane[p]
+    if w >= 0:
+        return planes_n[w, 0], planes_n[w, 1], planes_n[w, 2]
+    b = -2 - w
+    if b < 0:
+        return 0.0, 0.0, 0.0
+    dx = _min_image(st[p, 0] - st[b, 0], 0, box_len, periodic)
+    dy = _min_image(st[p, 1] - st[b, 1], 1, box_len, periodic)
+    dz = _min_image(st[p, 2] - st[b, 2], 2, box_len, periodic)
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    return dx / d, dy / d, dz / d
+
+
+@njit(inline="always")
+def _support_cos(sx, sy, sz, bx, by, bz):
+    """How much an impulse along the unit vector s presses a sphere into what backs it (unit
+    normal N = b): c = −s·N if c > 0, else 0.
+
+    A sphere on a plane, or asleep on another sphere, that is hit towards its support is
+    backed by it [OURS, rigid-support limit]: the support takes the part of the impulse along
+    N, so along the contact normal the sphere has the inverse mass (1 − c²)/m. Without this
+    the hit would push it into the support, it would land again at once and be hit again: an
+    endless zero-time cascade."""
+    c = -(sx * bx + sy * by + sz * bz)
+    return c if c > 0.0 else 0.0
+
+
+@njit(inline="always")
+def _backed_velocity(p, v0x, v0y, v0z, jx, jy, jz, bx, by, bz, st, inv_m):
+    """Velocity of a backed sphere p after the impulse J [N s] on it: its support (unit normal
+    b) takes J·b."""
+    jn = jx * bx + jy * by + jz * bz
+    st[p, 3] = v0x + inv_m[p] * (jx - jn * bx)
+    st[p, 4] = v0y + inv_m[p] * (jy - jn * by)
+    st[p, 5] = v0z + inv_m[p] * (jz - jn * bz)
+
+
+@njit
+def _after_backed(p, c, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                  rolling, rotation):
+    """Motion state of sphere p after a pair collision (c: its support cosine). A backed sphere
+    on a plane starts a new segment there; a backed sleeper stays asleep if it is left slower
+    than the landing speed (giving up less than ½ m v_land²); any other flies."""
+    st, mstate, mplane = flight[0], flight[3], flight[4]
+    if mstate[p] == MS_FLIGHT:
+        return
+    if c > 0.0 and mplane[p] >= 0:
+        _enter_plane(p, np.int64(mplane[p]), t, no_end, flight, dyn, walls, gravity, pair_table,
+                     fsc, friction, rolling, rotation)
+        return
+    v_sleep = fsc[F_LANDING_SPEED]
+    if c > 0.0 and st[p, 3] ** 2 + st[p, 4] ** 2 + st[p, 5] ** 2 <= v_sleep * v_sleep:
+        omg = dyn[0]
+        for k in range(3):
+            st[p, S_V + k] = 0.0
+            if rotation:
+                omg[p, k] = 0.0
+        return
+    _leave_plane(p, flight, dyn, gravity)
+    if mplane[p] < -1:
+        mplane[p] = -1  # no longer asleep on a sphere
+
+
+#: Code stored as the normal-model stage of a hop in the event log.
+STAGE_HOP = -1
+
+
+@njit
+def _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, tc):
+    """A hop of touching spheres i, j (unit normal n from j to i) that their accelerations
+    press together and that meet slower than v_hop = a_n t_c / 2 (a_n the pressing relative
+    acceleration [m/s²], t_c the TC time): an enduring sphere–sphere contact, which has no
+    motion state of its own, would otherwise be a zero-time sequence of ever-smaller
+    collisions (or of re-check failures) [OURS]. The normal relative velocity is set to +v_hop,
+    so that they touch again a TC time later; the kinetic energy this adds, at most
+    ½ m_eff v_hop² (~1e-14 J for millimetre steel spheres), is booked as negative dissipation.
+    Returns False (nothing done) when the pair is not pressed together or meets faster."""
+    a_n = ((acc[i, 0] - acc[j, 0]) * nx + (acc[i, 1] - acc[j, 1]) * ny
+           + (acc[i, 2] - acc[j, 2]) * nz)
+    inv_sum = inv_mi + inv_mj
+    if not a_n < 0.0 or inv_sum == 0.0 or tc <= 0.0:
+        return False
+    vn = ((st[i, 3] - st[j, 3]) * nx + (st[i, 4] - st[j, 4]) * ny
+          + (st[i, 5] - st[j, 5]) * nz)
+    v_hop = -0.5 * a_n * tc
+    if vn >= v_hop or -vn > v_hop:
+        return False
+    dv = v_hop - vn
+    m_eff = 1.0 / inv_sum
+    jn = m_eff * dv
+    for k, nk in enumerate((nx, ny, nz)):
+        st[i, S_V + k] += inv_mi * jn * nk
+        st[j, S_V + k] -= inv_mj * jn * nk
+    for k in range(rec.shape[0]):
+        rec[k] = math.nan
+    rec[REC_J_N] = jn
+    rec[REC_J_T] = 0.0
+    rec[REC_E_N] = math.nan
+    rec[REC_STAGE] = STAGE_HOP
+    rec[REC_REGIME] = 0
+    rec[REC_ENERGY_LOST] = -0.5 * m_eff * (v_hop * v_hop - vn * vn)
+    return True
+
+
+#: Restitution of a collision the TC model makes elastic.
+TC_RESTITUTION = 1.0
+
+
+@njit(inline="always")
+def _tc_row(row, t, t1, t2, fsc, row_tc):
+    """(pair row, made elastic) for a collision at t of bodies last hit at t1, t2 [s]: ``row``
+    itself, or, when one of them collided less than the TC time ago, a copy with a fixed
+    restitution of 1 in ``row_tc`` (TC model, Luding & McNamara 1998, through MODEL §3.9's
+    fixed-restitution bypass; the tangential model is unchanged)."""
+    tc = fsc[F_TC_TIME]
+    if tc > 0.0 and (t - t1 < tc or t - t2 < tc):
+        row_tc[:] = row
+        row_tc[P_E_FIXED] = TC_RESTITUTION
+        return row_tc, True
+    return row, False
 
 
 @njit(inline="always")
@@ -588,6 +743,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
     no_end = np.int64(END_NONE)  # a typed value, not a literal: one compiled _enter_plane
     st, counter, acc, mstate, mplane = flight[0], flight[1], flight[2], flight[3], flight[4]
     omg, inv_m, inv_i, mat, zstreak, alpha = dyn[0], dyn[1], dyn[2], dyn[3], dyn[4], dyn[5]
+    t_last, row_tc = dyn[7], dyn[8]
     planes_n, planes_mat, planes_vel, planes_omg = walls[1], walls[2], walls[3], walls[4]
     gravity, box_len, periodic = space
     ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
@@ -639,6 +795,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
         i = e
         kind = ev_kind[i]
         landed = False
+        tc_on = False
         if kind == EV_PAIR:
             j = np.int64(ev_partner[i])  # one integer type for sphere indices: one compile
             if counter[j] != ev_pcount[i]:
@@ -656,30 +813,83 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
             dist = math.sqrt(dx * dx + dy * dy + dz * dz)
             if grav_on:
                 sleeper = _falls_asleep(i, j, dx / dist, dy / dist, dz / dist, st, mstate,
-                                        gravity, fsc[F_LANDING_SPEED])
+                                        mplane, gravity, fsc[F_LANDING_SPEED])
                 if sleeper >= 0:
-                    # too slow an impact on a sphere at rest below it: the sphere stays on
-                    # its support (sleeping; see _falls_asleep), the support is not moved
                     other = j if sleeper == i else i
-                    _fall_asleep(sleeper, other, flight, dyn, rotation)
-                    counter[sleeper] += 1
-                    _repredict_later(isc, sleeper)
-                    _repredict_later(isc, other)
-                    counts[EV_LAND] += 1
-                    if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, sleeper,
-                                       other, MS_REST, END_NONE):
-                        return STATUS_LOG_FULL
-                    continue
+                    if mstate[other] != MS_REST:
+                        # a support sliding or rolling slower than the landing speed is
+                        # brought to rest first (giving up less than ½ m v_land²)
+                        for k in range(3):
+                            st[other, S_V + k] = 0.0
+                            if rotation:
+                                omg[other, k] = 0.0
+                        _enter_plane(other, np.int64(mplane[other]), t, no_end, flight, dyn,
+                                     walls, gravity, pair_table, fsc, friction, rolling,
+                                     rotation)
+                        counter[other] += 1
+                    if mstate[other] == MS_REST:
+                        # too slow an impact on a sphere at rest below it: the sphere stays on
+                        # its support (sleeping; see _falls_asleep), the support is not moved
+                        _fall_asleep(sleeper, other, flight, dyn, rotation)
+                        counter[sleeper] += 1
+                        _repredict_later(isc, sleeper)
+                        _repredict_later(isc, other)
+                        counts[EV_LAND] += 1
+                        if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, sleeper,
+                                           other, MS_REST, END_NONE):
+                            return STATUS_LOG_FULL
+                        continue
+                    # (the support cannot rest on its plane, a steep incline: a collision)
                 rest_i = mstate[i] == MS_REST
                 rest_j = mstate[j] == MS_REST
             wi = omg[i] if rotation else omg[0]
             wj = omg[j] if rotation else omg[0]
             ri = st[i, S_R]
             rj = st[j, S_R]
-            hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, dx / dist,
-                          dy / dist, dz / dist, inv_m[i], inv_m[j], inv_i[i], inv_i[j], ri,
-                          rj, 1.0 / ri + 1.0 / rj, pair_table[mat[i], mat[j]], rec,
-                          plasticity, friction, rolling, adhesion, rotation, False)
+            nx, ny, nz = dx / dist, dy / dist, dz / dist
+            ci = cj = 0.0
+            if grav_on:
+                # a sphere on a plane that the impulse presses into the plane is backed by it
+                bix, biy, biz = _support_normal(i, st, mstate, mplane, planes_n, box_len,
+                                                periodic)
+                bjx, bjy, bjz = _support_normal(j, st, mstate, mplane, planes_n, box_len,
+                                                periodic)
+                ci = _support_cos(nx, ny, nz, bix, biy, biz)
+                cj = _support_cos(-nx, -ny, -nz, bjx, bjy, bjz)
+                if ci * ci + cj * cj >= 2.0 - SUPPORT_EPS:
+                    ci = cj = 0.0  # pressed into two facing planes at once: no rigid limit
+            vi0x, vi0y, vi0z = st[i, 3], st[i, 4], st[i, 5]
+            vj0x, vj0y, vj0z = st[j, 3], st[j, 4], st[j, 5]
+            inv_mi = inv_m[i] * (1.0 - ci * ci)
+            inv_mj = inv_m[j] * (1.0 - cj * cj)
+            row, tc_on = _tc_row(pair_table[mat[i], mat[j]], t, t_last[i], t_last[j], fsc, row_tc)
+            hit = False
+            if grav_on:
+                # pressed together by their accelerations and meeting slower than a hop: a hop
+                # instead of a collision (see _hop)
+                hit = _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, fsc[F_TC_TIME])
+                if hit:
+                    counts[EV_HOP] += 1
+                    tc_on = False
+            if not hit:
+                hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, nx, ny, nz,
+                              inv_mi, inv_mj, inv_i[i], inv_i[j], ri, rj, 1.0 / ri + 1.0 / rj,
+                              row, rec, plasticity, friction, rolling, adhesion, rotation, False)
+            if hit and (ci > 0.0 or cj > 0.0):
+                # the impulse J on i, recovered from the body that moved freely along n
+                if inv_mi >= inv_mj:
+                    jx = (st[i, 3] - vi0x) / inv_mi
+                    jy = (st[i, 4] - vi0y) / inv_mi
+                    jz = (st[i, 5] - vi0z) / inv_mi
+                else:
+                    jx = -(st[j, 3] - vj0x) / inv_mj
+                    jy = -(st[j, 4] - vj0y) / inv_mj
+                    jz = -(st[j, 5] - vj0z) / inv_mj
+                if ci > 0.0:
+                    _backed_velocity(i, vi0x, vi0y, vi0z, jx, jy, jz, bix, biy, biz, st, inv_m)
+                if cj > 0.0:
+                    _backed_velocity(j, vj0x, vj0y, vj0z, -jx, -jy, -jz, bjx, bjy, bjz, st,
+                                     inv_m)
             if not hit:
                 # re-check failed: a grazing contact that round-off turned into "separating".
                 # Nothing changed, so no counter moves; both re-predict from the exact contact
@@ -693,19 +903,22 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                     return STATUS_COLLAPSE
                 continue
             if grav_on:
-                if mstate[i] != MS_FLIGHT:
-                    _leave_plane(i, flight, dyn, gravity)
-                if mstate[j] != MS_FLIGHT:
-                    _leave_plane(j, flight, dyn, gravity)
-                # spheres asleep on a sphere that was at rest fall again
-                if rest_i:
+                # a backed sphere stays on its plane (a new segment from its new velocity and
+                # spin); one pulled off it, or asleep on a sphere, flies
+                _after_backed(i, ci, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
+                              friction, rolling, rotation)
+                _after_backed(j, cj, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
+                              friction, rolling, rotation)
+                # spheres asleep on a sphere that was at rest and now moves fall again
+                if rest_i and mstate[i] != MS_REST:
                     _wake_sleepers(i, t, flight, dyn, walls, space, grid, sched, isc,
                                    grav_on, rotation)
-                if rest_j:
+                if rest_j and mstate[j] != MS_REST:
                     _wake_sleepers(j, t, flight, dyn, walls, space, grid, sched, isc,
                                    grav_on, rotation)
             counter[i] += 1
             counter[j] += 1
+            t_last[i] = t_last[j] = t
             _repredict_later(isc, i)
             _repredict_later(isc, j)
             other = j
@@ -734,11 +947,27 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                     continue
             wi = omg[i] if rotation else omg[0]
             ri = st[i, S_R]
+            ci = -1.0
+            if grav_on and mstate[i] != MS_FLIGHT and mplane[i] >= 0:
+                # on another plane (a sphere sliding into a side wall): backed by that plane
+                # as in the pair case, unless the wall pulls it off (or squeezes it head-on)
+                pw = mplane[i]
+                ci = -(planes_n[w, 0] * planes_n[pw, 0] + planes_n[w, 1] * planes_n[pw, 1]
+                       + planes_n[w, 2] * planes_n[pw, 2])
+                if ci < 0.0 or ci * ci >= 1.0 - SUPPORT_EPS:
+                    ci = -1.0
+            vi0x, vi0y, vi0z = st[i, 3], st[i, 4], st[i, 5]
+            inv_mi = inv_m[i] * (1.0 - ci * ci) if ci >= 0.0 else inv_m[i]
+            row, tc_on = _tc_row(pair_table[mat[i], planes_mat[w]], t, t_last[i], -NEVER, fsc,
+                                 row_tc)
             hit = resolve(st[i, S_V:S_V + 3], wi, planes_vel[w], planes_omg[w],
-                          planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_m[i], 0.0,
-                          inv_i[i], 0.0, ri, 0.0, 1.0 / ri,
-                          pair_table[mat[i], planes_mat[w]], rec, plasticity, friction,
+                          planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0,
+                          inv_i[i], 0.0, ri, 0.0, 1.0 / ri, row, rec, plasticity, friction,
                           rolling, adhesion, rotation, False)
+            if hit and ci >= 0.0:
+                _backed_velocity(i, vi0x, vi0y, vi0z, (st[i, 3] - vi0x) / inv_mi,
+                                 (st[i, 4] - vi0y) / inv_mi, (st[i, 5] - vi0z) / inv_mi,
+                                 planes_n[pw, 0], planes_n[pw, 1], planes_n[pw, 2], st, inv_m)
             if not hit:
                 # re-check failed (see the pair case)
                 _repredict_later(isc, i)
@@ -747,7 +976,10 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                     isc[I_COLLAPSED] = i
                     return STATUS_COLLAPSE
                 continue
-            if grav_on:
+            if grav_on and ci >= 0.0:
+                _enter_plane(i, np.int64(mplane[i]), t, no_end, flight, dyn, walls, gravity,
+                             pair_table, fsc, friction, rolling, rotation)
+            elif grav_on:
                 if mstate[i] != MS_FLIGHT:
                     _leave_plane(i, flight, dyn, gravity)  # knocked off its plane
                 gn, vn = _pressed(i, w, st, walls, gravity)
@@ -757,6 +989,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                     counts[EV_LAND] += 1
                     landed = True
             counter[i] += 1
+            t_last[i] = t
             _repredict_later(isc, i)
             other = -1 - w
         elif grav_on and kind == EV_STATE:
@@ -800,6 +1033,8 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
 
         # a collision was executed (pair or wall)
         counts[kind] += 1
+        if tc_on:
+            counts[EV_TC] += 1
         isc[I_N_EVENTS] += 1
         executed += 1
         fsc[F_DISSIPATED] += rec[REC_ENERGY_LOST]

@@ -161,6 +161,7 @@ class Simulation:
         self.seg_end = np.full(ng, np.inf)
         self.seg_code = np.zeros(ng, dtype=np.int8)
         self.seg_dir = np.zeros((ng, 3))
+        self.t_last = np.full(n, -np.inf)  # time of each sphere's last collision (TC model)
         self.pair_table = np.ascontiguousarray(scene.pair_table())
         planes = list(scene.planes)
         self.planes_p = np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3)
@@ -202,6 +203,7 @@ class Simulation:
         self.fsc[ev.F_FRAME_DT] = scene.frame_interval
         self.fsc[ev.F_LANDING_SPEED] = scene.landing_speed
         self.fsc[ev.F_CHI] = (CONVENTION_A if scene.rolling_convention == "A" else CONVENTION_B)
+        self.fsc[ev.F_TC_TIME] = scene.tc_time
         self.isc = np.zeros(ev.I_SIZE, dtype=np.int64)
         self.isc[ev.I_COLLAPSED] = -1
         self.isc[ev.I_PEND_A] = self.isc[ev.I_PEND_B] = -1
@@ -227,7 +229,8 @@ class Simulation:
         self._groups = (
             (self.state, self.counter, self.acc, self.mstate, self.mplane, self.seg_end,
              self.seg_code),
-            (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak, self.alpha, self.seg_dir),
+            (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak, self.alpha, self.seg_dir,
+             self.t_last, np.zeros(self.pair_table.shape[-1])),
             (self.planes_p, self.planes_n, self.planes_mat, self.planes_vel, self.planes_omg),
             (self.gravity, self.box_len, self.periodic),
             (self.origin, self.csize, self.ncell, self.cell, self.head, self.nxt, self.prv,

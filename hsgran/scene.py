@@ -139,12 +139,19 @@ AXES = "xyz"
 
 TOP_KEYS = ("scene", "output", "materials", "contacts", "walls", "particles", "fill",
             "enduring_contact")
-ENDURING_KEYS = ("landing_speed", "rolling_convention")
+ENDURING_KEYS = ("landing_speed", "rolling_convention", "tc_time")
 #: Default rebound speed [m/s] below which a sphere bouncing on a plane stays on it (sliding,
 #: rolling or resting, MODEL §5.3). Such a rebound would rise v²/2g = 51 nm, below any surface
 #: roughness; giving it up costs at most ½ m v² of kinetic energy and the remaining bounces'
 #: time 2v/(g(1 − e)) (1 ms at e = 0.8), both reported in docs/enduring-contact.md.
 DEFAULT_LANDING_SPEED = 1e-3
+#: Default TC time [s] (TC model, Luding & McNamara 1998): a collision of a sphere less than this
+#: after its previous one is elastic. It is of the order of the Hertz contact duration of
+#: millimetre steel spheres at 0.01–1 m/s (8–30 µs): collisions that close together are not
+#: binary, and treating them as elastic ends inelastic collapse (sequences of ever-faster
+#: collisions in clusters) at the price of the energy they would have dissipated; the run
+#: summary counts them ("tc"). See docs/enduring-contact.md.
+DEFAULT_TC_TIME = 1e-5
 #: Rolling-friction conventions of MODEL §5.3: does the rolling torque act while sliding?
 ROLLING_CONVENTIONS = {"A": "rolling torque also while sliding",
                        "B": "rolling torque only while rolling"}
@@ -207,6 +214,8 @@ class Scene:
         landing_speed: Rebound speed [m/s] below which a sphere stays on a plane.
         rolling_convention: "A" (rolling torque also while sliding) or "B" (only while
             rolling), MODEL §5.3.
+        tc_time: TC-model time [s]: collisions of a sphere closer together than this are
+            elastic (0: off).
     """
 
     name: str
@@ -230,6 +239,7 @@ class Scene:
     source: str = "<string>"
     landing_speed: float = DEFAULT_LANDING_SPEED
     rolling_convention: str = "A"
+    tc_time: float = DEFAULT_TC_TIME
 
     @property
     def n(self) -> int:
@@ -476,6 +486,7 @@ class _SceneBuilder:
             source=self.source,
             landing_speed=self.landing_speed,
             rolling_convention=self.rolling_convention,
+            tc_time=self.tc_time,
         )
 
     # -- [scene] and [output] --
@@ -517,6 +528,12 @@ class _SceneBuilder:
         if "landing_speed" in tab:
             self.landing_speed = check_positive(tab["landing_speed"],
                                                 "enduring_contact.landing_speed", "m/s")
+        self.tc_time = DEFAULT_TC_TIME
+        if "tc_time" in tab:
+            self.tc_time = check_number(tab["tc_time"], "enduring_contact.tc_time")
+            if self.tc_time < 0.0:
+                raise InputError(f"must be >= 0 s (0 turns the TC model off), got "
+                                 f"{tab['tc_time']!r}", "enduring_contact.tc_time")
         conv = tab.get("rolling_convention", "A")
         if conv not in ROLLING_CONVENTIONS:
             raise InputError(f"must be \"A\" ({ROLLING_CONVENTIONS['A']}) or \"B\" "
