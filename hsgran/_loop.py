@@ -39,6 +39,8 @@ from hsgran.events.queue import heap_build, heap_update
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import (
     NEVER,
+    TOUCHING_REL,
+    approach_noise,
     face_exit_time,
     flight_position,
     pair_contact_accelerated,
@@ -110,6 +112,14 @@ ZERO_TIME_REL = 4e-16
 #: looping forever (inelastic collapse or a rounding loop). Legitimate simultaneous events (a
 #: Newton's cradle, a symmetric three-body hit) involve a sphere a handful of times.
 MAX_ZERO_TIME_EVENTS = 1000
+#: Events of one sphere in succession, each less than the TC time after the previous one (or
+#: at the same instant), after which it counts as jammed: in an enduring contact with several
+#: bodies at once (see _falls_asleep). Far above the handful of collisions of a legitimate
+#: simultaneous hit, far below the collapse guard.
+JAM_EVENTS = 64
+#: A jammed sphere may fall asleep on a resting sphere it meets if the contact normal points
+#: upwards at all (cos > 1e-3 to the vertical: gravity presses it onto that sphere) [-].
+JAM_SUPPORT_COS = 1e-3
 #: A sphere whose gap to a plane is within this fraction of its radius at t = 0 starts on the
 #: plane: the scene check accepts touching spheres written in decimal to 1e-12 (hsgran.scene
 #: CONTACT_TOLERANCE), so the same bound.
@@ -128,7 +138,7 @@ S_WIDTH = 8
 #            what a prediction needs of every sphere: the 64-byte rows, the event counters and,
 #            with gravity, each sphere's acceleration [m/s²], motion state (hsgran.onplane MS_*),
 #            plane, and the end time [s] and kind (END_*) of its on-plane motion segment
-#   dyn    = (omg, inv_m, inv_i, mat, zstreak, alpha, seg_dir, t_last, row_tc)
+#   dyn    = (omg, inv_m, inv_i, mat, zstreak, alpha, seg_dir, t_last, row_tc, rapid)
 #            what a collision needs in addition; alpha [rad/s²] and seg_dir (the direction the
 #            segment's end refers to) only with gravity; t_last: time of each sphere's last
 #            collision [s] (TC model); row_tc: scratch pair row for an elastic TC collision
@@ -291,6 +301,11 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
         nz = planes_n[w, 2]
         gap = ((xi - planes_p[w, 0]) * nx + (yi - planes_p[w, 1]) * ny
                + (zi - planes_p[w, 2]) * nz - ri)
+        if gap <= TOUCHING_REL * ri:
+            # touching within rounding: a contact now if approaching or pressed (a gap of
+            # 1e-19 m closing at 1e-5 m/s would otherwise come 1e-14 s later, after every
+            # zero-time pair event of a sphere wedged between neighbours on this plane)
+            gap = 0.0
         gn = gi[0] * nx + gi[1] * ny + gi[2] * nz
         tau = plane_contact_time(gap, ui * nx + vi * ny + wi * nz, gn)
         if tau < best:
@@ -302,6 +317,9 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
     # always the one that touches later). First gather the heads of the lists, then walk them:
     # the head loads do not depend on each other, so their cache misses overlap (measured 1.2x
     # faster predictions at N = 1e6, where the grid does not fit the cache; same at N = 1e3).
+    # i's share of the rounding scales of an approach (motion.approach_noise)
+    vs_i = abs(ui) + abs(vi) + abs(wi)
+    xs_i = abs(xi) + abs(yi) + abs(zi)
     heads, shifts, ac, ah = grid[7], grid[8], grid[9], grid[10]
     mx = _axis_cells(cell[i, 0], ncell[0], box_len[0], periodic[0], 0, ac, ah)
     my = _axis_cells(cell[i, 1], ncell[1], box_len[1], periodic[1], 1, ac, ah)
@@ -333,10 +351,13 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
                     tau = pair_contact_accelerated(
                         ox - xj, oy - yj, oz - zj, ui - uj, vi - vj, wi - wj, gi[0] - acc[j, 0],
                         gi[1] - acc[j, 1], gi[2] - acc[j, 2], ri + st[j, S_R],
-                        min(best, seg_end[j] - t_now))
+                        min(best, seg_end[j] - t_now), vs_i + abs(uj) + abs(vj) + abs(wj),
+                        xs_i + abs(xj) + abs(yj) + abs(zj))
                 else:
                     tau = pair_contact_before(ox - xj, oy - yj, oz - zj, ui - uj, vi - vj,
-                                              wi - wj, ri + st[j, S_R], best)
+                                              wi - wj, ri + st[j, S_R], best,
+                                              vs_i + abs(uj) + abs(vj) + abs(wj),
+                                              xs_i + abs(xj) + abs(yj) + abs(zj))
                 if tau < best:
                     best = tau
                     kind = EV_PAIR
@@ -393,7 +414,8 @@ def _leave_plane(i, flight, dyn, gravity):
     seg_code[i] = END_NONE
     for k in range(3):
         acc[i, k] = gravity[k]
-        alpha[i, k] = 0.0
+        if i < alpha.shape[0]:  # (1, 3) without rotation
+            alpha[i, k] = 0.0
 
 
 @njit
@@ -458,7 +480,7 @@ def _can_support(p, st, mstate, mplane, v_sleep):
 
 
 @njit
-def _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_sleep):
+def _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_sleep, jam_i, jam_j):
     """Which of i, j (n = unit vector from j to i) falls asleep on the other, or −1.
 
     A sphere falls asleep when it meets from above a sphere that is at rest (on a plane or
@@ -466,7 +488,13 @@ def _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_sleep):
     relative speed at most ``v_sleep``: what a collision would have done is a rebound slower
     than that. This is hsgran's remedy for sphere–sphere inelastic collapse in piles [OURS,
     after DynamO's sleeping particles]; it gives up at most ½ m v_sleep² per sphere stopped,
-    and the support is not pushed."""
+    and the support is not pushed.
+
+    "From above" is within 60° of the vertical (SUPPORT_COS), or, for a jammed sphere
+    (``jam_i``/``jam_j``: JAM_EVENTS rapid events in succession), any upward direction: a
+    sphere wedged between a wall and a sphere it leans on, or in a pocket of spheres on a
+    plate, rests against several bodies at once, which the hard-sphere loop can only see as an
+    endless buzz of (TC-elastic) collisions [OURS]."""
     g = math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
     if g == 0.0:
         return -1
@@ -476,13 +504,39 @@ def _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_sleep):
     dvz = st[i, 5] - st[j, 5]
     if dvx * dvx + dvy * dvy + dvz * dvz > v_sleep * v_sleep:
         return -1
-    if (mstate[i] != MS_REST and up >= SUPPORT_COS
+    if (mstate[i] != MS_REST and up >= (JAM_SUPPORT_COS if jam_i else SUPPORT_COS)
             and _can_support(j, st, mstate, mplane, v_sleep)):
         return i
-    if (mstate[j] != MS_REST and -up >= SUPPORT_COS
+    if (mstate[j] != MS_REST and -up >= (JAM_SUPPORT_COS if jam_j else SUPPORT_COS)
             and _can_support(i, st, mstate, mplane, v_sleep)):
         return j
     return -1
+
+
+@njit(inline="always")
+def _note_rapid(p, t, t_last, rapid, tc):
+    """Count sphere p's collisions in succession that come less than the TC time ``tc`` [s]
+    after its previous one (jam detection, JAM_EVENTS)."""
+    if t - t_last[p] < tc:
+        rapid[p] += 1
+    else:
+        rapid[p] = 0
+
+
+@njit(inline="always")
+def _both_slow_on_supports(i, j, st, mstate, v_land):
+    """Whether spheres i and j are both on a support (a plane, or asleep on a sphere) and both
+    slower than the landing speed ``v_land`` [m/s]. When such spheres meet they both stop
+    where they are (on a steep incline the plane then sets them moving again) [OURS]: the
+    sphere-against-sphere counterpart of landing, at a cost of at most ½ m v_land² per sphere
+    stopped. As a collision, a slow sphere sliding into a resting one that had just taken a
+    sleeper made a zero-time chain: the collision moved the support, the sleeper stopped it
+    again, and the slider met it again, ever slower."""
+    if mstate[i] == MS_FLIGHT or mstate[j] == MS_FLIGHT:
+        return False
+    vi2 = st[i, 3] * st[i, 3] + st[i, 4] * st[i, 4] + st[i, 5] * st[i, 5]
+    vj2 = st[j, 3] * st[j, 3] + st[j, 4] * st[j, 4] + st[j, 5] * st[j, 5]
+    return vi2 <= v_land * v_land and vj2 <= v_land * v_land
 
 
 @njit
@@ -493,7 +547,8 @@ def _fall_asleep(a, b, flight, dyn, rotation):
     for k in range(3):
         st[a, S_V + k] = 0.0
         acc[a, k] = 0.0
-        alpha[a, k] = 0.0
+        if a < alpha.shape[0]:  # (1, 3) without rotation
+            alpha[a, k] = 0.0
         if rotation:
             omg[a, k] = 0.0
     mstate[a] = MS_REST
@@ -622,6 +677,7 @@ def _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, tc):
     collisions (or of re-check failures) [OURS]. The normal relative velocity is set to +v_hop,
     so that they touch again a TC time later; the kinetic energy this adds, at most
     ½ m_eff v_hop² (~1e-14 J for millimetre steel spheres), is booked as negative dissipation.
+    A sphere given an inverse mass of 0 (one at rest: the loop holds it) is not moved.
     Returns False (nothing done) when the pair is not pressed together or meets faster."""
     a_n = ((acc[i, 0] - acc[j, 0]) * nx + (acc[i, 1] - acc[j, 1]) * ny
            + (acc[i, 2] - acc[j, 2]) * nz)
@@ -677,6 +733,40 @@ def _pressed(i, w, st, walls, gravity):
            + gravity[2] * planes_n[w, 2])
     vn = st[i, 3] * planes_n[w, 0] + st[i, 4] * planes_n[w, 1] + st[i, 5] * planes_n[w, 2]
     return gn, vn
+
+
+@njit
+def _resting_plane(i, st, walls, gravity, v_land):
+    """A plane that sphere i (in flight) touches within rounding while gravity presses it onto
+    it and it moves off or onto it slower than the landing speed ``v_land`` [m/s], or −1. Such
+    a sphere lands there at once: the rebound it would make is a landing's (the normal speed
+    given up is at most v_land) [OURS]. A sphere wedged between neighbours on a plane and
+    hopped off them, slightly upwards, would otherwise meet them again and again before it
+    ever came back to the plane."""
+    planes_p, planes_n = walls[0], walls[1]
+    for w in range(planes_p.shape[0]):
+        gap = ((st[i, 0] - planes_p[w, 0]) * planes_n[w, 0]
+               + (st[i, 1] - planes_p[w, 1]) * planes_n[w, 1]
+               + (st[i, 2] - planes_p[w, 2]) * planes_n[w, 2] - st[i, S_R])
+        if gap <= TOUCHING_REL * st[i, S_R]:
+            gn, vn = _pressed(i, w, st, walls, gravity)
+            if gn > 0.0 and abs(vn) <= v_land:
+                return w
+    return -1
+
+
+@njit(inline="always")
+def _approaching(i, j, dx, dy, dz, sigma, st):
+    """Whether touching spheres i, j (r = x_i − x_j = (dx, dy, dz) [m]) approach by more than
+    rounding: the re-check matching _predict's test (motion.approach_noise)."""
+    rw = 0.0
+    v_sum = 0.0
+    x_sum = 0.0
+    for k, rk in enumerate((dx, dy, dz)):
+        rw += rk * (st[i, S_V + k] - st[j, S_V + k])
+        v_sum += abs(st[i, S_V + k]) + abs(st[j, S_V + k])
+        x_sum += abs(st[i, k]) + abs(st[j, k])
+    return -rw > approach_noise(sigma, v_sum, x_sum)
 
 
 @njit(inline="always")
@@ -743,7 +833,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
     no_end = np.int64(END_NONE)  # a typed value, not a literal: one compiled _enter_plane
     st, counter, acc, mstate, mplane = flight[0], flight[1], flight[2], flight[3], flight[4]
     omg, inv_m, inv_i, mat, zstreak, alpha = dyn[0], dyn[1], dyn[2], dyn[3], dyn[4], dyn[5]
-    t_last, row_tc = dyn[7], dyn[8]
+    t_last, row_tc, rapid = dyn[7], dyn[8], dyn[9]
     planes_n, planes_mat, planes_vel, planes_omg = walls[1], walls[2], walls[3], walls[4]
     gravity, box_len, periodic = space
     ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
@@ -812,8 +902,32 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
             dz = _min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
             dist = math.sqrt(dx * dx + dy * dy + dz * dz)
             if grav_on:
+                landed_on = -1
+                for p in (i, j):
+                    if mstate[p] == MS_FLIGHT:
+                        landed_on = _resting_plane(p, st, walls, gravity,
+                                                   fsc[F_LANDING_SPEED])
+                        if landed_on >= 0:
+                            # lying on a plane, in flight only by a slow hop: it lands first
+                            _enter_plane(p, landed_on, t, no_end, flight, dyn, walls, gravity,
+                                         pair_table, fsc, friction, rolling, rotation)
+                            counter[p] += 1
+                            break
+                if landed_on >= 0:
+                    _repredict_later(isc, i)
+                    _repredict_later(isc, j)
+                    counts[EV_LAND] += 1
+                    if zstreak[i] > MAX_ZERO_TIME_EVENTS or zstreak[j] > MAX_ZERO_TIME_EVENTS:
+                        isc[I_COLLAPSED] = i
+                        return STATUS_COLLAPSE
+                    if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, p,
+                                       -1 - landed_on, mstate[p], END_NONE):
+                        return STATUS_LOG_FULL
+                    continue
                 sleeper = _falls_asleep(i, j, dx / dist, dy / dist, dz / dist, st, mstate,
-                                        mplane, gravity, fsc[F_LANDING_SPEED])
+                                        mplane, gravity, fsc[F_LANDING_SPEED],
+                                        rapid[i] > JAM_EVENTS or zstreak[i] > JAM_EVENTS,
+                                        rapid[j] > JAM_EVENTS or zstreak[j] > JAM_EVENTS)
                 if sleeper >= 0:
                     other = j if sleeper == i else i
                     if mstate[other] != MS_REST:
@@ -840,6 +954,29 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                             return STATUS_LOG_FULL
                         continue
                     # (the support cannot rest on its plane, a steep incline: a collision)
+                if _both_slow_on_supports(i, j, st, mstate, fsc[F_LANDING_SPEED]):
+                    # two spheres on supports, both slower than the landing speed, meet: they
+                    # stop against each other (see _both_slow_on_supports)
+                    for p in (i, j):
+                        if mstate[p] != MS_REST:
+                            for k in range(3):
+                                st[p, S_V + k] = 0.0
+                                if rotation:
+                                    omg[p, k] = 0.0
+                            _enter_plane(p, np.int64(mplane[p]), t, no_end, flight, dyn,
+                                         walls, gravity, pair_table, fsc, friction, rolling,
+                                         rotation)
+                            counter[p] += 1
+                    _repredict_later(isc, i)
+                    _repredict_later(isc, j)
+                    counts[EV_LAND] += 1
+                    if zstreak[i] > MAX_ZERO_TIME_EVENTS or zstreak[j] > MAX_ZERO_TIME_EVENTS:
+                        isc[I_COLLAPSED] = i
+                        return STATUS_COLLAPSE
+                    if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, j,
+                                       mstate[i], END_NONE):
+                        return STATUS_LOG_FULL
+                    continue
                 rest_i = mstate[i] == MS_REST
                 rest_j = mstate[j] == MS_REST
             wi = omg[i] if rotation else omg[0]
@@ -864,14 +1001,24 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
             inv_mj = inv_m[j] * (1.0 - cj * cj)
             row, tc_on = _tc_row(pair_table[mat[i], mat[j]], t, t_last[i], t_last[j], fsc, row_tc)
             hit = False
+            held_i = held_j = False
             if grav_on:
                 # pressed together by their accelerations and meeting slower than a hop: a hop
-                # instead of a collision (see _hop)
-                hit = _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, fsc[F_TC_TIME])
+                # instead of a collision (see _hop); a sphere at rest is held where it is
+                held_i = mstate[i] == MS_REST
+                held_j = mstate[j] == MS_REST
+                hit = _hop(i, j, nx, ny, nz, 0.0 if held_i else inv_mi,
+                           0.0 if held_j else inv_mj, st, acc, rec, fsc[F_TC_TIME])
                 if hit:
                     counts[EV_HOP] += 1
                     tc_on = False
-            if not hit:
+                    if held_i:
+                        ci = inv_mi = 0.0
+                    if held_j:
+                        cj = inv_mj = 0.0
+                else:
+                    held_i = held_j = False
+            if not hit and _approaching(i, j, dx, dy, dz, ri + rj, st):
                 hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, nx, ny, nz,
                               inv_mi, inv_mj, inv_i[i], inv_i[j], ri, rj, 1.0 / ri + 1.0 / rj,
                               row, rec, plasticity, friction, rolling, adhesion, rotation, False)
@@ -891,7 +1038,8 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                     _backed_velocity(j, vj0x, vj0y, vj0z, -jx, -jy, -jz, bjx, bjy, bjz, st,
                                      inv_m)
             if not hit:
-                # re-check failed: a grazing contact that round-off turned into "separating".
+                # re-check failed: a grazing contact that round-off turned into "separating"
+                # (or into an approach below rounding, which _predict ignores as well).
                 # Nothing changed, so no counter moves; both re-predict from the exact contact
                 # state, which no longer approaches. A loop of such retries is caught by the
                 # collapse guard (MAX_ZERO_TIME_EVENTS).
@@ -905,10 +1053,12 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
             if grav_on:
                 # a backed sphere stays on its plane (a new segment from its new velocity and
                 # spin); one pulled off it, or asleep on a sphere, flies
-                _after_backed(i, ci, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
-                              friction, rolling, rotation)
-                _after_backed(j, cj, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
-                              friction, rolling, rotation)
+                if not held_i:
+                    _after_backed(i, ci, t, no_end, flight, dyn, walls, gravity, pair_table,
+                                  fsc, friction, rolling, rotation)
+                if not held_j:
+                    _after_backed(j, cj, t, no_end, flight, dyn, walls, gravity, pair_table,
+                                  fsc, friction, rolling, rotation)
                 # spheres asleep on a sphere that was at rest and now moves fall again
                 if rest_i and mstate[i] != MS_REST:
                     _wake_sleepers(i, t, flight, dyn, walls, space, grid, sched, isc,
@@ -918,6 +1068,8 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                                    grav_on, rotation)
             counter[i] += 1
             counter[j] += 1
+            _note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
+            _note_rapid(j, t, t_last, rapid, fsc[F_TC_TIME])
             t_last[i] = t_last[j] = t
             _repredict_later(isc, i)
             _repredict_later(isc, j)
@@ -989,6 +1141,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                     counts[EV_LAND] += 1
                     landed = True
             counter[i] += 1
+            _note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
             t_last[i] = t
             _repredict_later(isc, i)
             other = -1 - w

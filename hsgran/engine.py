@@ -162,6 +162,7 @@ class Simulation:
         self.seg_code = np.zeros(ng, dtype=np.int8)
         self.seg_dir = np.zeros((ng, 3))
         self.t_last = np.full(n, -np.inf)  # time of each sphere's last collision (TC model)
+        self.rapid = np.zeros(n, dtype=np.int32)  # collisions in succession within tc (jams)
         self.pair_table = np.ascontiguousarray(scene.pair_table())
         planes = list(scene.planes)
         self.planes_p = np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3)
@@ -230,7 +231,7 @@ class Simulation:
             (self.state, self.counter, self.acc, self.mstate, self.mplane, self.seg_end,
              self.seg_code),
             (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak, self.alpha, self.seg_dir,
-             self.t_last, np.zeros(self.pair_table.shape[-1])),
+             self.t_last, np.zeros(self.pair_table.shape[-1]), self.rapid),
             (self.planes_p, self.planes_n, self.planes_mat, self.planes_vel, self.planes_omg),
             (self.gravity, self.box_len, self.periodic),
             (self.origin, self.csize, self.ncell, self.cell, self.head, self.nxt, self.prv,

@@ -86,22 +86,54 @@ def pair_contact_time(rx, ry, rz, wx, wy, wz, sigma):
     return upward_root(sigma * sigma - rr, -2.0 * rw, -2.0 * ww)
 
 
+#: Unit round-off of a double [-].
+ROUNDOFF = float(np.finfo(np.float64).eps)
+#: Units of round-off within which the normal approach of touching spheres is noise [-]. The
+#: normal relative velocity r·w/|r| of touching spheres carries the rounding of both velocities
+#: and, through the direction of r, of both positions; an approach below that level is not a
+#: collision: the impulse it would give cannot change velocities that large (a sphere met at
+#: 1e-20 m/s by a neighbour moving at 1.5e-3 m/s got 8e-25 N s, which left both unchanged and
+#: was met again at the same instant until the collapse guard stopped the run). 16 units leave
+#: room for the few roundings in r and w; ignoring such an approach lets an overlap grow at most
+#: at that speed (~1e-16 m/s for millimetre spheres at 1e-3 m/s in a 0.1 m box). [OURS]
+APPROACH_NOISE_ULPS = 16.0
+#: Spheres count as touching, for the noise test, while |r|² is within this fraction of σ² [-]
+#: (a gap or overlap of 5e-11 σ): far above the rounding of |r|² (~1e-14 σ² for positions of
+#: a few hundred σ) and far below the 1e-9 R overlap a run must stay under.
+TOUCHING_REL = 1e-10
+
+
+@njit(inline="always")
+def approach_noise(sigma, v_sum, x_sum):
+    """Rounding level of r·w for touching spheres [m²/s]: |r| ≈ σ carries the rounding of the
+    velocities (``v_sum`` = Σ|v_k| of both spheres [m/s]), |w| ≤ v_sum that of the positions
+    (``x_sum`` = Σ|x_k| of both [m]). See APPROACH_NOISE_ULPS. [OURS]"""
+    return APPROACH_NOISE_ULPS * ROUNDOFF * v_sum * (sigma + x_sum)
+
+
 @njit
-def pair_contact_before(rx, ry, rz, wx, wy, wz, sigma, horizon):
+def pair_contact_before(rx, ry, rz, wx, wy, wz, sigma, horizon, v_sum=0.0, x_sum=0.0):
     """:func:`pair_contact_time`, but ``inf`` for any contact not before ``horizon`` [s].
 
     The event loop only needs a pair's contact time if it beats the best event found so far.
     The quadratic f(τ) = σ² − |r + wτ|² has its peak at τ* = −r·w/|w|²; if f(horizon) < 0 and
     the peak lies at or after the horizon, f is still below zero and rising there, so there is
     no contact before the horizon: a square root and a division are saved.
+
+    With ``v_sum``, ``x_sum`` (see :func:`approach_noise`) touching spheres whose approach is
+    below rounding do not touch again: moving in a straight line relative to each other, they
+    are at their closest now.
     """
     rr = rx * rx + ry * ry + rz * rz
     rw = rx * wx + ry * wy + rz * wz
     if rw >= 0.0:
         return NEVER
     ww = wx * wx + wy * wy + wz * wz
-    c = sigma * sigma - rr
+    s2 = sigma * sigma
+    c = s2 - rr
     if horizon < NEVER and -rw >= ww * horizon and c - horizon * (2.0 * rw + ww * horizon) < 0.0:
+        return NEVER
+    if c > -TOUCHING_REL * s2 and -rw <= approach_noise(sigma, v_sum, x_sum):
         return NEVER
     return upward_root(c, -2.0 * rw, -2.0 * ww)
 
@@ -142,8 +174,11 @@ def face_exit_time(x, v, g, lo, hi):
 
 
 #: Iterations of the bracketed Newton–bisection root search; each halves the bracket at worst,
-#: so 200 reach any double-precision width from any finite start.
-ROOT_MAX_ITER = 200
+#: and the doubles span 2^2098 from the largest to the smallest, so 2200 reach the width of one
+#: unit in the last place from any finite bracket (the search stops there; a well-scaled
+#: bracket takes ~60). 200 were not enough for a bracket of 1e62 s (a relative acceleration
+#: of 4e-63 m/s², found by the property test).
+ROOT_MAX_ITER = 2200
 
 
 @njit(inline="always")
@@ -207,7 +242,8 @@ def _dpoly_root(c4, c3, c2, c1, lo, hi):
 
 
 @njit
-def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon):
+def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon, v_sum=0.0,
+                             x_sum=0.0):
     """Time until two spheres with different constant accelerations touch (a quartic).
 
     A flying sphere and one rolling or resting on a plane, or two spheres rolling differently:
@@ -235,13 +271,21 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon)
     c1 = 2.0 * (rx * wx + ry * wy + rz * wz)
     c0 = rx * rx + ry * ry + rz * rz - s2
     if c4 == 0.0:
-        return pair_contact_before(rx, ry, rz, wx, wy, wz, sigma, horizon)
-    # every real root lies within Cauchy's bound
-    bound = 1.0 + max(abs(c3), abs(c2), abs(c1), abs(c0)) / c4
+        return pair_contact_before(rx, ry, rz, wx, wy, wz, sigma, horizon, v_sum, x_sum)
+    # every real root lies within Fujiwara's bound (unlike Cauchy's, 1 + max|c_k|/c4, it stays
+    # evaluable for a tiny c4: a relative acceleration of 4e-63 m/s² put Cauchy's at 1e125 s,
+    # where the gap polynomial overflows)
+    bound = 2.0 * max(abs(c3) / c4, math.sqrt(abs(c2) / c4), (abs(c1) / c4) ** (1.0 / 3.0),
+                      (0.5 * abs(c0) / c4) ** 0.25)
     h = min(horizon, bound)
-    if c0 <= 0.0:
-        # touching already (round-off): a contact now if approaching, else look further on
-        if c1 < 0.0:
+    touching = c0 <= TOUCHING_REL * s2
+    if touching:
+        # touching already (round-off): a contact now if approaching beyond rounding, or if
+        # pressed together (f'' < 0) with no approach to speak of; else look further on, past
+        # the first piece, where f rises from a value that is only round-off (its sign there
+        # is noise, and a "root" found in it came 1e-17 s later, again and again)
+        noise = 2.0 * approach_noise(sigma, v_sum, x_sum)
+        if c1 < -noise or (c2 < 0.0 and c1 <= noise and c0 <= 0.0):
             return 0.0
     # critical points of f' (zeros of f'' = 12 c4 τ² + 6 c3 τ + 2 c2) split [0, h] into pieces
     # on which f' is monotone; the zeros of f' found there split it into pieces where f is
@@ -282,7 +326,7 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon)
     for k in range(nc - 1):
         a = crit[k]
         b = crit[k + 1]
-        if b <= a:
+        if b <= a or (touching and k == 0):
             continue
         fa, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a)
         fb, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, b)

@@ -141,3 +141,118 @@ def test_oblique_hit_moves_a_backed_sphere_along_the_plate_only():
     assert vel[0, 0] > 0.0
     d = np.linalg.norm(pos[1] - pos[0])
     assert d >= 0.002 * (1 - 1e-12)
+
+
+WEDGE = """
+[scene]
+name = "wedge"
+duration = 0.5
+gravity = [0.0, 0.0, -9.81]
+effects = {effects}
+[output]
+frame_interval = 0.05
+[[contacts]]
+between = ["steel", "steel"]
+restitution = 0.5
+sliding_friction = 0.3
+[[walls]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+material = "steel"
+[[walls]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [1.0, 0.0, 0.0]
+material = "steel"
+[[walls]]
+kind = "plane"
+point = [0.00375, 0.0, 0.0]
+normal = [-1.0, 0.0, 0.0]
+material = "steel"
+[[particles]]
+material = "steel"
+radius = 0.001
+position = [0.00275, 0.0, 0.001]
+velocity = [0.0, 0.0, 0.0]
+[[particles]]
+material = "steel"
+radius = 0.001
+position = [0.0012, 0.0, 0.004]
+velocity = [0.0, 0.0, 0.0]
+"""
+
+#: Collisions the wedge takes to come to rest (measured 2505 without rotation): a bound far
+#: below the ~6e5 per simulated second of the endless TC-elastic buzz it made before jammed
+#: spheres could fall asleep.
+WEDGE_MAX_COLLISIONS = 20_000
+#: The wedged sphere falls asleep where its last bounce left it, between the wall and the
+#: sphere: a gap to the wall of at most 1e-3 R [m].
+WEDGE_WALL_GAP = 1e-6
+
+
+@pytest.mark.parametrize("effects", ['["gravity"]', '["gravity", "rotation", "friction"]'])
+def test_sphere_wedged_between_a_wall_and_a_sphere_comes_to_rest(effects):
+    # A sphere dropped into a gap narrower than itself, between a side wall and a sphere in
+    # the opposite corner: it leans on that sphere at 61° from the vertical (too steep to fall
+    # asleep on it as on a pile) and on the wall. Jammed, it falls asleep on the sphere.
+    sim = Simulation(parse_scene(WEDGE.format(effects=effects)))
+    summary = sim.run()
+    assert summary.collisions <= WEDGE_MAX_COLLISIONS
+    assert list(sim.mstate) == [MS_REST, MS_REST]
+    assert sim.mplane[1] == -2  # asleep on sphere 0
+    np.testing.assert_array_equal(sim.vel, 0.0)
+    d = np.linalg.norm(sim.pos[1] - sim.pos[0])
+    assert d == pytest.approx(0.002, rel=1e-9)
+    # at the wall, up to where the buzz left it when it fell asleep (measured 1e-8 and 3e-7 m)
+    assert 0.001 <= sim.pos[1, 0] <= 0.001 + WEDGE_WALL_GAP
+    assert d >= 0.002 * (1.0 - 1e-9)  # no overlap beyond 1e-9 R
+
+
+PAIR_ON_PLATE = """
+[scene]
+name = "slider meets a resting sphere"
+duration = 0.01
+gravity = [0.0, 0.0, -9.81]
+effects = ["gravity"]
+[output]
+frame_interval = 0.01
+[[contacts]]
+between = ["steel", "steel"]
+restitution = 0.9
+[[walls]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+material = "steel"
+[[particles]]
+material = "steel"
+radius = 0.001
+position = [0.0, 0.0, 0.001]
+velocity = [{v}, 0.0, 0.0]
+[[particles]]
+material = "steel"
+radius = 0.001
+position = [0.002000001, 0.0, 0.001]
+velocity = [0.0, 0.0, 0.0]
+"""
+
+
+def test_spheres_on_a_plate_meeting_slower_than_the_landing_speed_stop_together():
+    # 5e-4 m/s < landing speed 1e-3 m/s: both stop where they meet, no collision
+    sim = Simulation(parse_scene(PAIR_ON_PLATE.format(v=5e-4)))
+    summary = sim.run()
+    assert summary.collisions == 0
+    assert summary.events["land"] == 1
+    assert list(sim.mstate) == [MS_REST, MS_REST]
+    np.testing.assert_array_equal(sim.vel, 0.0)
+    assert sim.pos[1, 0] - sim.pos[0, 0] == pytest.approx(0.002, rel=1e-12)
+
+
+def test_spheres_on_a_plate_meeting_faster_collide():
+    # 0.05 m/s: a collision, the resting sphere moves off along the plate (no friction here)
+    sim = Simulation(parse_scene(PAIR_ON_PLATE.format(v=0.05)))
+    summary = sim.run()
+    assert summary.collisions == 1
+    assert sim.vel[1, 0] > 0.04
+    assert sim.vel[1, 2] == 0.0
