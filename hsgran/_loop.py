@@ -405,7 +405,7 @@ def _repredict_later(isc, p):
 
 
 @njit
-def _leave_plane(i, flight, dyn, gravity):
+def _leave_plane(i, flight, dyn, gravity, rotation):
     """Sphere i flies again (a collision moved it): acceleration g, constant spin."""
     acc, mstate, seg_end, seg_code = flight[2], flight[3], flight[5], flight[6]
     alpha = dyn[5]
@@ -414,8 +414,28 @@ def _leave_plane(i, flight, dyn, gravity):
     seg_code[i] = END_NONE
     for k in range(3):
         acc[i, k] = gravity[k]
-        if i < alpha.shape[0]:  # (1, 3) without rotation
+        if rotation:
             alpha[i, k] = 0.0
+
+
+@njit(inline="always")
+def _halt(p, st, omg, rotation):
+    """Sphere p stops: zero velocity and spin."""
+    for k in range(3):
+        st[p, S_V + k] = 0.0
+        if rotation:
+            omg[p, k] = 0.0
+
+
+@njit
+def _stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                   rotation):
+    """Sphere p, on its plane, stops there: at rest, or, on a slope too steep for rest, starting
+    a new segment from standstill."""
+    _halt(p, flight[0], dyn[0], rotation)
+    _enter_plane(p, np.int64(flight[4][p]), t, np.int64(END_NONE), flight, dyn, walls, gravity,
+                 pair_table, fsc, friction, rolling, rotation)
+    flight[1][p] += 1
 
 
 @njit
@@ -543,14 +563,11 @@ def _both_slow_on_supports(i, j, st, mstate, v_land):
 def _fall_asleep(a, b, flight, dyn, rotation):
     """Sphere a rests on sphere b from now on: zero velocity, spin and acceleration."""
     st, acc, mstate, mplane, seg_end = flight[0], flight[2], flight[3], flight[4], flight[5]
-    omg, alpha = dyn[0], dyn[5]
+    _halt(a, st, dyn[0], rotation)
     for k in range(3):
-        st[a, S_V + k] = 0.0
         acc[a, k] = 0.0
-        if a < alpha.shape[0]:  # (1, 3) without rotation
-            alpha[a, k] = 0.0
         if rotation:
-            omg[a, k] = 0.0
+            dyn[5][a, k] = 0.0
     mstate[a] = MS_REST
     mplane[a] = -2 - b  # the support: sphere b
     seg_end[a] = NEVER
@@ -580,7 +597,7 @@ def _wake_sleepers(s, t, flight, dyn, walls, space, grid, sched, isc, grav_on, r
                     while q >= 0:
                         if mstate[q] == MS_REST and mplane[q] == -2 - b:
                             _advance(st, acc, omg, alpha, q, t, grav_on, rotation)
-                            _leave_plane(q, flight, dyn, gravity)
+                            _leave_plane(q, flight, dyn, gravity, rotation)
                             mplane[q] = -1
                             counter[q] += 1
                             _reschedule_fn(q, t, flight, walls, space, grid, sched, isc,
@@ -653,13 +670,9 @@ def _after_backed(p, c, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
         return
     v_sleep = fsc[F_LANDING_SPEED]
     if c > 0.0 and st[p, 3] ** 2 + st[p, 4] ** 2 + st[p, 5] ** 2 <= v_sleep * v_sleep:
-        omg = dyn[0]
-        for k in range(3):
-            st[p, S_V + k] = 0.0
-            if rotation:
-                omg[p, k] = 0.0
+        _halt(p, st, dyn[0], rotation)
         return
-    _leave_plane(p, flight, dyn, gravity)
+    _leave_plane(p, flight, dyn, gravity, rotation)
     if mplane[p] < -1:
         mplane[p] = -1  # no longer asleep on a sphere
 
@@ -767,6 +780,64 @@ def _approaching(i, j, dx, dy, dz, sigma, st):
         v_sum += abs(st[i, S_V + k]) + abs(st[j, S_V + k])
         x_sum += abs(st[i, k]) + abs(st[j, k])
     return -rw > approach_noise(sigma, v_sum, x_sum)
+
+
+SETTLE_NONE = 0  #: the pair collides
+SETTLE_PLANE = 1  #: a sphere lying on a plane landed there
+SETTLE_SLEEP = 2  #: a sphere fell asleep on the other (progress: it cannot repeat until the
+#: support moves, so the collapse guard does not count it)
+SETTLE_STOP = 3  #: both stopped on their supports
+
+
+@njit
+def _settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
+            rolling, rotation):
+    """The rules that end a slow meeting of spheres i, j (unit normal n from j to i) in rest
+    instead of a collision, in this order [OURS]:
+
+    1. one of them, in flight, lies on a plane it meets slower than the landing speed
+       (_resting_plane): it lands there first;
+    2. one falls asleep on the other (_falls_asleep; a slow support on a plane is brought to
+       rest first, and if it cannot rest there, a steep incline, they collide);
+    3. both are on supports and slow (_both_slow_on_supports): both stop.
+
+    Returns (rule, sphere, partner): the rule that applied (SETTLE_*, SETTLE_NONE when the
+    pair collides), and the sphere and partner of the event log's landing entry (partner
+    −1 − w for plane w).
+    """
+    st, counter, mstate, mplane = flight[0], flight[1], flight[3], flight[4]
+    v_land = fsc[F_LANDING_SPEED]
+    no_end = np.int64(END_NONE)
+    for p in (i, j):
+        if mstate[p] == MS_FLIGHT:
+            w = _resting_plane(p, st, walls, gravity, v_land)
+            if w >= 0:
+                _enter_plane(p, w, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
+                             friction, rolling, rotation)
+                counter[p] += 1
+                return SETTLE_PLANE, p, -1 - w
+    rapid, zstreak = dyn[9], dyn[4]
+    sleeper = _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_land,
+                            rapid[i] > JAM_EVENTS or zstreak[i] > JAM_EVENTS,
+                            rapid[j] > JAM_EVENTS or zstreak[j] > JAM_EVENTS)
+    if sleeper >= 0:
+        other = j if sleeper == i else i
+        if mstate[other] != MS_REST:
+            # giving up less than ½ m v_land²
+            _stop_on_plane(other, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                           rolling, rotation)
+        if mstate[other] == MS_REST:
+            # the sphere stays on its support, which is not moved
+            _fall_asleep(sleeper, other, flight, dyn, rotation)
+            counter[sleeper] += 1
+            return SETTLE_SLEEP, sleeper, other
+    if _both_slow_on_supports(i, j, st, mstate, v_land):
+        for p in (i, j):
+            if mstate[p] != MS_REST:
+                _stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                               rolling, rotation)
+        return SETTLE_STOP, i, j
+    return SETTLE_NONE, -1, 0
 
 
 @njit(inline="always")
@@ -901,80 +972,24 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
             dy = _min_image(st[i, 1] - st[j, 1], 1, box_len, periodic)
             dz = _min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
             dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+            nx, ny, nz = dx / dist, dy / dist, dz / dist
             if grav_on:
-                landed_on = -1
-                for p in (i, j):
-                    if mstate[p] == MS_FLIGHT:
-                        landed_on = _resting_plane(p, st, walls, gravity,
-                                                   fsc[F_LANDING_SPEED])
-                        if landed_on >= 0:
-                            # lying on a plane, in flight only by a slow hop: it lands first
-                            _enter_plane(p, landed_on, t, no_end, flight, dyn, walls, gravity,
-                                         pair_table, fsc, friction, rolling, rotation)
-                            counter[p] += 1
-                            break
-                if landed_on >= 0:
-                    _repredict_later(isc, i)
-                    _repredict_later(isc, j)
+                # a slow meeting that ends in rest instead of a collision (see _settle)
+                rule, who, what = _settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity,
+                                          pair_table, fsc, friction, rolling, rotation)
+                if rule != SETTLE_NONE:
+                    # re-predictions in a fixed order (it sets the sequence numbers that break
+                    # ties between simultaneous events): a sleeper first, else i
+                    first = who if rule == SETTLE_SLEEP else i
+                    _repredict_later(isc, first)
+                    _repredict_later(isc, j if first == i else i)
                     counts[EV_LAND] += 1
-                    if zstreak[i] > MAX_ZERO_TIME_EVENTS or zstreak[j] > MAX_ZERO_TIME_EVENTS:
+                    if rule != SETTLE_SLEEP and (zstreak[i] > MAX_ZERO_TIME_EVENTS
+                                                 or zstreak[j] > MAX_ZERO_TIME_EVENTS):
                         isc[I_COLLAPSED] = i
                         return STATUS_COLLAPSE
-                    if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, p,
-                                       -1 - landed_on, mstate[p], END_NONE):
-                        return STATUS_LOG_FULL
-                    continue
-                sleeper = _falls_asleep(i, j, dx / dist, dy / dist, dz / dist, st, mstate,
-                                        mplane, gravity, fsc[F_LANDING_SPEED],
-                                        rapid[i] > JAM_EVENTS or zstreak[i] > JAM_EVENTS,
-                                        rapid[j] > JAM_EVENTS or zstreak[j] > JAM_EVENTS)
-                if sleeper >= 0:
-                    other = j if sleeper == i else i
-                    if mstate[other] != MS_REST:
-                        # a support sliding or rolling slower than the landing speed is
-                        # brought to rest first (giving up less than ½ m v_land²)
-                        for k in range(3):
-                            st[other, S_V + k] = 0.0
-                            if rotation:
-                                omg[other, k] = 0.0
-                        _enter_plane(other, np.int64(mplane[other]), t, no_end, flight, dyn,
-                                     walls, gravity, pair_table, fsc, friction, rolling,
-                                     rotation)
-                        counter[other] += 1
-                    if mstate[other] == MS_REST:
-                        # too slow an impact on a sphere at rest below it: the sphere stays on
-                        # its support (sleeping; see _falls_asleep), the support is not moved
-                        _fall_asleep(sleeper, other, flight, dyn, rotation)
-                        counter[sleeper] += 1
-                        _repredict_later(isc, sleeper)
-                        _repredict_later(isc, other)
-                        counts[EV_LAND] += 1
-                        if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, sleeper,
-                                           other, MS_REST, END_NONE):
-                            return STATUS_LOG_FULL
-                        continue
-                    # (the support cannot rest on its plane, a steep incline: a collision)
-                if _both_slow_on_supports(i, j, st, mstate, fsc[F_LANDING_SPEED]):
-                    # two spheres on supports, both slower than the landing speed, meet: they
-                    # stop against each other (see _both_slow_on_supports)
-                    for p in (i, j):
-                        if mstate[p] != MS_REST:
-                            for k in range(3):
-                                st[p, S_V + k] = 0.0
-                                if rotation:
-                                    omg[p, k] = 0.0
-                            _enter_plane(p, np.int64(mplane[p]), t, no_end, flight, dyn,
-                                         walls, gravity, pair_table, fsc, friction, rolling,
-                                         rotation)
-                            counter[p] += 1
-                    _repredict_later(isc, i)
-                    _repredict_later(isc, j)
-                    counts[EV_LAND] += 1
-                    if zstreak[i] > MAX_ZERO_TIME_EVENTS or zstreak[j] > MAX_ZERO_TIME_EVENTS:
-                        isc[I_COLLAPSED] = i
-                        return STATUS_COLLAPSE
-                    if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, j,
-                                       mstate[i], END_NONE):
+                    if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, who, what,
+                                       mstate[who], END_NONE):
                         return STATUS_LOG_FULL
                     continue
                 rest_i = mstate[i] == MS_REST
@@ -983,7 +998,6 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
             wj = omg[j] if rotation else omg[0]
             ri = st[i, S_R]
             rj = st[j, S_R]
-            nx, ny, nz = dx / dist, dy / dist, dz / dist
             ci = cj = 0.0
             if grav_on:
                 # a sphere on a plane that the impulse presses into the plane is backed by it
@@ -1084,7 +1098,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                     # too slow to bounce: it stays on the plane (MODEL §5.3; what is given
                     # up is the rebound, at most ½ m v_land², see hsgran.scene)
                     if mstate[i] != MS_FLIGHT:
-                        _leave_plane(i, flight, dyn, gravity)
+                        _leave_plane(i, flight, dyn, gravity, rotation)
                     _enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table,
                                  fsc, friction, rolling, rotation)
                     counter[i] += 1
@@ -1133,7 +1147,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                              pair_table, fsc, friction, rolling, rotation)
             elif grav_on:
                 if mstate[i] != MS_FLIGHT:
-                    _leave_plane(i, flight, dyn, gravity)  # knocked off its plane
+                    _leave_plane(i, flight, dyn, gravity, rotation)  # knocked off its plane
                 gn, vn = _pressed(i, w, st, walls, gravity)
                 if gn > 0.0 and vn <= fsc[F_LANDING_SPEED]:
                     _enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table,

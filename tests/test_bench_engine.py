@@ -1,24 +1,13 @@
 """tools/bench_engine.py runs and prints its figures (smoke test; speeds are never asserted)."""
 
-import importlib.util
 import re
-from pathlib import Path
-
-SCRIPT = Path(__file__).resolve().parents[1] / "tools" / "bench_engine.py"
 
 #: A number as the script prints it (3.36e+03, 193, 5.57e+05, 0.44).
 NUMBER = r"[0-9][0-9.,]*(?:e[+-][0-9]+)?"
 
 
-def load_script():
-    spec = importlib.util.spec_from_file_location("bench_engine", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_bench_engine_quick_run_prints_speed_memory_and_targets(capsys):
-    bench = load_script()
+def test_bench_engine_quick_run_prints_speed_memory_and_targets(capsys, load_tool):
+    bench = load_tool("bench_engine")
     assert bench.main(["--quick", "--sizes", "1e3"]) == 0
     out = capsys.readouterr().out
     # speed row of N = 1000: setup, warm-up and timed collisions, wall, events/s, collisions/s

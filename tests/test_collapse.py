@@ -10,6 +10,21 @@ from hsgran.engine import Simulation
 from hsgran.onplane import MS_REST
 from hsgran.scene import parse_scene
 
+
+def sphere(position, velocity=("0.0", "0.0", "0.0"), radius="0.001"):
+    """A steel [[particles]] table; coordinates as TOML text (numbers or format fields)."""
+    return (f"[[particles]]\nmaterial = \"steel\"\nradius = {radius}\n"
+            f"position = [{', '.join(position)}]\nvelocity = [{', '.join(velocity)}]\n")
+
+
+def plane(point, normal):
+    """A steel plane [[walls]] table; coordinates as TOML text."""
+    return (f"[[walls]]\nkind = \"plane\"\npoint = [{', '.join(point)}]\n"
+            f"normal = [{', '.join(normal)}]\nmaterial = \"steel\"\n")
+
+
+FLOOR = plane(("0.0", "0.0", "0.0"), ("0.0", "0.0", "1.0"))
+
 ROW = """
 [scene]
 name = "three in a row"
@@ -22,22 +37,8 @@ tc_time = {tc}
 [[contacts]]
 between = ["steel", "steel"]
 restitution = {e}
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [0.0, 0.0, 0.0]
-velocity = [1.0, 0.0, 0.0]
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [0.00201, 0.0, 0.0]
-velocity = [0.0, 0.0, 0.0]
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [0.00402, 0.0, 0.0]
-velocity = [0.0, 0.0, 0.0]
-"""
+""" + (sphere(("0.0", "0.0", "0.0"), ("1.0", "0.0", "0.0"))
+       + sphere(("0.00201", "0.0", "0.0")) + sphere(("0.00402", "0.0", "0.0")))
 
 #: Three spheres in a row, the first hitting the other two, collapse (infinitely many
 #: collisions in finite time, all velocities equal in the limit) for e < 7 − 4√3 = 0.072
@@ -91,22 +92,8 @@ frame_interval = {duration}
 [[contacts]]
 between = ["steel", "steel"]
 restitution = {e}
-[[walls]]
-kind = "plane"
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-material = "steel"
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [0.0, 0.0, 0.001]
-velocity = [0.0, 0.0, 0.0]
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [{x}, 0.0, {z}]
-velocity = [0.0, 0.0, {vz}]
-"""
+""" + FLOOR + sphere(("0.0", "0.0", "0.001")) + sphere(("{x}", "0.0", "{z}"),
+                                                      ("0.0", "0.0", "{vz}"))
 
 #: The rebound off a backed sphere is one impulse in closed form; rounding only.
 REBOUND_RTOL = 1e-9
@@ -155,32 +142,9 @@ frame_interval = 0.05
 between = ["steel", "steel"]
 restitution = 0.5
 sliding_friction = 0.3
-[[walls]]
-kind = "plane"
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-material = "steel"
-[[walls]]
-kind = "plane"
-point = [0.0, 0.0, 0.0]
-normal = [1.0, 0.0, 0.0]
-material = "steel"
-[[walls]]
-kind = "plane"
-point = [0.00375, 0.0, 0.0]
-normal = [-1.0, 0.0, 0.0]
-material = "steel"
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [0.00275, 0.0, 0.001]
-velocity = [0.0, 0.0, 0.0]
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [0.0012, 0.0, 0.004]
-velocity = [0.0, 0.0, 0.0]
-"""
+""" + (FLOOR + plane(("0.0", "0.0", "0.0"), ("1.0", "0.0", "0.0"))
+       + plane(("0.00375", "0.0", "0.0"), ("-1.0", "0.0", "0.0"))
+       + sphere(("0.00275", "0.0", "0.001")) + sphere(("0.0012", "0.0", "0.004")))
 
 #: Collisions the wedge takes to come to rest (measured 2505 without rotation): a bound far
 #: below the ~6e5 per simulated second of the endless TC-elastic buzz it made before jammed
@@ -220,22 +184,8 @@ frame_interval = 0.01
 [[contacts]]
 between = ["steel", "steel"]
 restitution = 0.9
-[[walls]]
-kind = "plane"
-point = [0.0, 0.0, 0.0]
-normal = [0.0, 0.0, 1.0]
-material = "steel"
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [0.0, 0.0, 0.001]
-velocity = [{v}, 0.0, 0.0]
-[[particles]]
-material = "steel"
-radius = 0.001
-position = [0.002000001, 0.0, 0.001]
-velocity = [0.0, 0.0, 0.0]
-"""
+""" + (FLOOR + sphere(("0.0", "0.0", "0.001"), ("{v}", "0.0", "0.0"))
+       + sphere(("0.002000001", "0.0", "0.001")))
 
 
 def test_spheres_on_a_plate_meeting_slower_than_the_landing_speed_stop_together():
