@@ -47,7 +47,7 @@ from hsgran.motion import (
     pair_contact_before,
     plane_contact_time,
 )
-from hsgran.onplane import END_NONE, MS_FLIGHT, MS_REST, plane_segment
+from hsgran.onplane import END_NONE, MS_ASLEEP, MS_FLIGHT, MS_REST, plane_segment
 
 EV_NONE = 0  #: nothing scheduled
 EV_PAIR = 1  #: sphere–sphere collision
@@ -149,7 +149,7 @@ S_WIDTH = 8
 #            five are scratch space: 27 list heads, their image shifts (27, 3), the per-axis list
 #            coordinates and shifts (3, 3) of _predict, and a stack (N,) for waking sleepers
 #   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s)
-#   out    = (fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i)
+#   out    = (fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i, fr_ms)
 
 
 @njit(inline="always")
@@ -896,7 +896,9 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
     The array groups are listed at the top of this module. ``omg`` is (N, 3) with rotation
     and (1, 3) otherwise (never read then); likewise ``fr_omg``. ``log_f`` (L, 4) holds
     (time, J_n, J_t, e_n) and ``log_i`` (L, 5) holds (kind, i, j, stage, regime) of each
-    executed collision; j = −1 − w for a collision with plane w.
+    executed collision; j = −1 − w for a collision with plane w. ``fr_ms`` (F, N) int8 takes
+    every sphere's motion state at each frame (``MS_*``, ``MS_ASLEEP`` for a sleeper; left at
+    flight without gravity, where there are no motion states).
     """
     plasticity, friction, rolling = flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING]
     adhesion, rotation, grav_on = flags[FL_ADHESION], flags[FL_ROTATION], flags[FL_GRAVITY]
@@ -910,6 +912,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
     ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
     ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s = sched
     fr_time, fr_pos, fr_vel, fr_omg, fr_diss = out[0], out[1], out[2], out[3], out[4]
+    fr_ms = out[7]
     n = st.shape[0]
     t_end = fsc[F_T_END]
     executed = 0
@@ -937,6 +940,9 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                 fr_vel[f, j, 0] = u
                 fr_vel[f, j, 1] = v
                 fr_vel[f, j, 2] = w
+                if grav_on:
+                    fr_ms[f, j] = (MS_ASLEEP if mstate[j] == MS_REST and mplane[j] <= -2
+                                   else mstate[j])
                 if rotation:
                     dt = t - st[j, S_T] if grav_on else 0.0
                     fr_omg[f, j, 0] = omg[j, 0] + alpha[j, 0] * dt if grav_on else omg[j, 0]

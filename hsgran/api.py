@@ -28,7 +28,7 @@ class TrajectoryObserver:
         """Append a block of frames."""
         self.writer.append_frames(b.step, b.time, b.position, b.velocity, b.angular_velocity,
                                   b.kinetic_translational, b.kinetic_rotational, b.potential,
-                                  b.dissipated)
+                                  b.dissipated, motion_state=b.motion_state)
 
     def on_events(self, b) -> None:
         """Append a block of the event log."""
@@ -78,6 +78,6 @@ def run_scene(scene: Scene | str | os.PathLike, output: str | os.PathLike | None
         box_upper=scene.box_upper, periodic=tuple(scene.periodic),
         angular_velocity=bool(scene.effects.rotation), scene_text=scene.text,
         effects=list(scene.effects.enabled()), seed=int(scene.seed), version=__version__,
-        log_events=log_events, creator_args=creator_args)
+        log_events=log_events, creator_args=creator_args, motion_state=True)
     with writer:
         return sim.run(until, observers=[TrajectoryObserver(writer)], progress=progress)

@@ -61,6 +61,7 @@ class FrameBlock:
     kinetic_rotational: np.ndarray | None  #: Σ ½ I ω² [J] (F,)
     potential: np.ndarray  #: −Σ m g·x [J] (F,)
     dissipated: np.ndarray  #: energy dissipated by collisions since t = 0 [J] (F,)
+    motion_state: np.ndarray  #: ``hsgran.onplane.MS_*`` of every sphere (F, N) int8
 
 
 @dataclass
@@ -210,13 +211,14 @@ class Simulation:
         self.isc[ev.I_PEND_A] = self.isc[ev.I_PEND_B] = -1
         self.counts = np.zeros(len(ev.EVENT_NAMES), dtype=np.int64)
         self.rec = np.zeros(REC_SIZE)
-        per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2))
+        per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
         nf = frame_buffer or max(1, min(FRAME_BUFFER_MAX, FRAME_BUFFER_BYTES // per_frame))
         self.fr_time = np.zeros(nf)
         self.fr_diss = np.zeros(nf)
         self.fr_pos = np.zeros((nf, n, 3))
         self.fr_vel = np.zeros((nf, n, 3))
         self.fr_omg = np.zeros((nf, n, 3)) if self.rotation else np.zeros((1, 1, 3))
+        self.fr_ms = np.zeros((nf, n), dtype=np.int8)
         nl = LOG_BUFFER if self.log_events else 1
         self.log_f = np.zeros((nl, 4))
         self.log_i = np.zeros((nl, 5), dtype=np.int64)
@@ -240,7 +242,7 @@ class Simulation:
             (self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount, self.heap,
              self.where, self.key_t, self.key_s),
             (self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.fr_diss, self.log_f,
-             self.log_i),
+             self.log_i, self.fr_ms),
         )
         flight, dyn, walls, space, grid, sched, _ = self._groups
         ev.init(flight, dyn, walls, space, grid, sched, self.pair_table, self.fsc, self.isc,
@@ -286,7 +288,7 @@ class Simulation:
         self._frames_emitted += f
         self.isc[ev.I_N_FRAMES] = 0
         return FrameBlock(step, self.fr_time[:f].copy(), pos, vel, omg, kin_t, kin_r, pot,
-                          self.fr_diss[:f].copy())
+                          self.fr_diss[:f].copy(), self.fr_ms[:f].copy())
 
     def _event_block(self) -> EventBlock | None:
         m = int(self.isc[ev.I_N_LOG])

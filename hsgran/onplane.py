@@ -44,7 +44,10 @@ MS_FLIGHT = 0  #: free flight (parabola under gravity)
 MS_SLIDING = 1  #: on a plane, slipping at the contact point
 MS_ROLLING = 2  #: on a plane, rolling without slip
 MS_REST = 3  #: on a plane, at rest
-MOTION_STATE_NAMES = ("flight", "sliding", "rolling", "rest")
+#: Output only (trajectory frames): at rest on another sphere. The engine keeps such a sphere as
+#: ``MS_REST`` with its support sphere in place of a plane.
+MS_ASLEEP = 4
+MOTION_STATE_NAMES = ("flight", "sliding", "rolling", "rest", "asleep")
 
 END_NONE = 0  #: the segment lasts until something hits the sphere
 END_SLIP = 1  #: the slip vanishes (C): snap to rolling

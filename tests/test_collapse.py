@@ -2,12 +2,13 @@
 backed by the plate (issue: sliding, rolling and resting; docs/enduring-contact.md)."""
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
 from hsgran.engine import Simulation
-from hsgran.onplane import MS_REST
+from hsgran.onplane import MS_ASLEEP, MS_REST
 from hsgran.scene import parse_scene
 
 
@@ -161,10 +162,12 @@ def test_sphere_wedged_between_a_wall_and_a_sphere_comes_to_rest(effects):
     # the opposite corner: it leans on that sphere at 61° from the vertical (too steep to fall
     # asleep on it as on a pile) and on the wall. Jammed, it falls asleep on the sphere.
     sim = Simulation(parse_scene(WEDGE.format(effects=effects)))
-    summary = sim.run()
+    frames = []
+    summary = sim.run(observers=[SimpleNamespace(on_frames=frames.append)])
     assert summary.collisions <= WEDGE_MAX_COLLISIONS
     assert list(sim.mstate) == [MS_REST, MS_REST]
     assert sim.mplane[1] == -2  # asleep on sphere 0
+    assert frames[-1].motion_state[-1].tolist() == [MS_REST, MS_ASLEEP]  # as the file says
     np.testing.assert_array_equal(sim.vel, 0.0)
     d = np.linalg.norm(sim.pos[1] - sim.pos[0])
     assert d == pytest.approx(0.002, rel=1e-9)

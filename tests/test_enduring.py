@@ -6,7 +6,9 @@ import math
 import numpy as np
 import pytest
 
+from hsgran.api import run_scene
 from hsgran.engine import Simulation
+from hsgran.io import read_trajectory
 from hsgran.onplane import END_SLIP, END_STOP, MS_REST, MS_ROLLING, MS_SLIDING
 from hsgran.refdata import read_csv
 from hsgran.scene import parse_scene
@@ -270,3 +272,16 @@ def test_dropped_ball_comes_to_rest_after_the_geometric_series_of_bounces(e):
     # landing early gives up at most the remaining bounces, 2 v_land / (g (1 − e))
     t_inf = math.sqrt(2 * h / g) + 2 * e * v0 / (g * (1 - e))
     assert t_inf - 2 * landing / (g * (1 - e)) <= t_land <= t_inf
+
+
+def test_trajectory_frames_record_sliding_rolling_and_rest_at_the_closed_form_times(tmp_path):
+    case = CASES[0]
+    t1, _, _, t2, _ = closed_form(*case, "A")
+    scene = plate_scene(*case, "A", duration=1.2 * t2)
+    scene.frame_interval = t2 / 40  # no frame falls on a transition: t1, t2 are no multiples
+    out = tmp_path / "plate.h5"
+    run_scene(scene, out)
+    traj = read_trajectory(out)
+    want = np.where(traj.time < t1, MS_SLIDING, np.where(traj.time < t2, MS_ROLLING, MS_REST))
+    np.testing.assert_array_equal(traj.motion_state[:, 0], want)
+    assert {MS_SLIDING, MS_ROLLING, MS_REST} <= set(traj.motion_state[:, 0].tolist())

@@ -123,6 +123,9 @@ class Trajectory:
         summary: Run summary (empty when the writer did not finish).
         complete: ``False`` when the writer was interrupted before closing the file.
         creator_args: Command line or arguments of the run, as recorded.
+        motion_state: Motion state of every particle in every frame, shape (F, N), int8
+            (``hsgran.onplane.MS_*``: 0 flight, 1 sliding, 2 rolling, 3 at rest on a plane,
+            4 asleep on another sphere), or ``None`` when the file has none.
     """
 
     time: np.ndarray
@@ -146,6 +149,7 @@ class Trajectory:
     summary: dict
     complete: bool = True
     creator_args: str = ""
+    motion_state: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -181,6 +185,7 @@ class TrajectoryWriter:
         version: hsgran version.
         log_events: Whether to create the event log (:meth:`append_events`).
         creator_args: Command line or arguments of the run, for the record.
+        motion_state: Whether frames carry every particle's motion state.
 
     Raises:
         InputError: The file cannot be created, or a periodic axis has no box.
@@ -205,6 +210,7 @@ class TrajectoryWriter:
         version: str,
         log_events: bool,
         creator_args: str = "",
+        motion_state: bool = False,
     ):
         radius = np.asarray(radius, dtype=np.float64)
         if radius.ndim != 1 or radius.shape[0] == 0:
@@ -244,6 +250,7 @@ class TrajectoryWriter:
         self.path = os.fspath(path)
         self.n_particles = n
         self.has_angular_velocity = bool(angular_velocity)
+        self.has_motion_state = bool(motion_state)
         self.has_events = bool(log_events)
         self.has_edges = any(periodic)
         self._edges = None if box_lower is None else box_upper - box_lower
@@ -345,6 +352,11 @@ class TrajectoryWriter:
                 np.float64,
                 UNIT_ANGULAR_VELOCITY,
             )
+        self._motion_state = None
+        if self.has_motion_state:
+            self._motion_state = _create_value(
+                self._element(particles, "motion_state"), (n,), np.int8, None
+            )
 
         box = particles.create_group("box")
         box.attrs["dimension"] = np.int32(3)
@@ -422,6 +434,7 @@ class TrajectoryWriter:
         kinetic_rotational,
         potential,
         dissipated,
+        motion_state=None,
     ) -> None:
         """Append a block of F frames (F may be 0) and flush the file.
 
@@ -437,6 +450,8 @@ class TrajectoryWriter:
                 there are no angular velocities.
             potential: Potential energy [J], shape (F,).
             dissipated: Energy dissipated so far [J], shape (F,).
+            motion_state: Motion states, shape (F, N), int8; ``None`` exactly when the writer
+                was created with ``motion_state=False``.
 
         Raises:
             ValueError: A shape does not match, an optional field is given or missing against
@@ -466,6 +481,12 @@ class TrajectoryWriter:
                     self._angular_velocity,
                     _checked(angular_velocity, "angular_velocity", (n_new, n, 3), np.float64),
                 )
+            )
+        if self.has_motion_state != (motion_state is not None):
+            raise ValueError(_optional_message("motion_state", self.has_motion_state))
+        if motion_state is not None:
+            values.append(
+                (self._motion_state, _checked(motion_state, "motion_state", (n_new, n), np.int8))
             )
         given = {
             "kinetic_translational": kinetic_translational,
@@ -670,6 +691,9 @@ def _read(f: h5py.File) -> Trajectory:
     has_angular = "angular_velocity" in particles
     if has_angular:
         elements.append(particles["angular_velocity"])
+    has_state = "motion_state" in particles
+    if has_state:
+        elements.append(particles["motion_state"])
     if "edges" in particles["box"]:
         elements.append(particles["box/edges"])
     observables = f[OBSERVABLES]
@@ -709,6 +733,7 @@ def _read(f: h5py.File) -> Trajectory:
         summary=json.loads(_text(params["summary"])) if "summary" in params else {},
         complete=bool(params.get("complete", False)),
         creator_args=_text(params.get("creator_args", "")),
+        motion_state=particles["motion_state/value"][:n_frames] if has_state else None,
     )
 
 
@@ -728,7 +753,8 @@ def _create_value(group, row_shape, dtype, unit):
         compression=COMPRESSION,
         shuffle=True,
     )
-    _set_unit(dset, unit)
+    if unit is not None:
+        _set_unit(dset, unit)
     return dset
 
 
@@ -755,9 +781,10 @@ def _check_non_decreasing(values: np.ndarray, last, name: str) -> None:
 
 
 def _optional_message(name: str, enabled: bool) -> str:
+    flag = "motion_state" if name == "motion_state" else "angular_velocity"
     if enabled:
-        return f"{name}: required, the writer was created with angular_velocity=True"
-    return f"{name}: must be None, the writer was created with angular_velocity=False"
+        return f"{name}: required, the writer was created with {flag}=True"
+    return f"{name}: must be None, the writer was created with {flag}=False"
 
 
 def _seed_attribute(seed):

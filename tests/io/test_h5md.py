@@ -41,6 +41,7 @@ def writer_args(*, angular=True, events=True, box=True, periodic=(True, False, F
         version="0.1.0",
         log_events=events,
         creator_args="hsgran run scene.toml -o out.h5",
+        motion_state=angular,  # the optional fields come and go together in these tests
     )
 
 
@@ -62,6 +63,7 @@ def make_blocks(angular=True, seed=0):
                 kinetic_rotational=rng.uniform(size=size) if angular else None,
                 potential=rng.normal(size=size),
                 dissipated=rng.uniform(size=size),
+                motion_state=rng.integers(0, 5, (size, N), dtype=np.int8) if angular else None,
             )
         )
     return blocks
@@ -117,8 +119,11 @@ def test_round_trip_is_bit_for_bit(tmp_path, angular):
     if angular:
         expected = concat(blocks, "angular_velocity")
         np.testing.assert_array_equal(traj.angular_velocity, expected, strict=True)
+        np.testing.assert_array_equal(traj.motion_state, concat(blocks, "motion_state"),
+                                      strict=True)
     else:
         assert traj.angular_velocity is None
+        assert traj.motion_state is None
     names = set(ENERGY_OBSERVABLES) - (set() if angular else {"kinetic_energy_rotational"})
     assert set(traj.energies) == names
     for name in names:
@@ -400,6 +405,10 @@ def test_writer_rejects_mismatched_arrays(tmp_path):
             writer.append_frames(**bad)
         with pytest.raises(ValueError, match="angular_velocity"):
             writer.append_frames(**dict(blocks[0], angular_velocity=None))
+        with pytest.raises(ValueError, match="motion_state=True"):
+            writer.append_frames(**dict(blocks[0], motion_state=None))
+        with pytest.raises(ValueError, match="motion_state"):
+            writer.append_frames(**dict(blocks[0], motion_state=blocks[0]["motion_state"][:1]))
         with pytest.raises(ValueError, match="log_events=False"):
             writer.append_events(**make_events(2))
         writer.append_frames(**blocks[1])
