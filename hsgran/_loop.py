@@ -655,6 +655,25 @@ def _backed_velocity(p, v0x, v0y, v0z, jx, jy, jz, bx, by, bz, st, inv_m):
     st[p, 5] = v0z + inv_m[p] * (jz - jn * bz)
 
 
+@njit(inline="always")
+def _stays_asleep(p, c, st, mstate, mplane, v_sleep):
+    """Whether sphere p, asleep on a sphere and pressed into it (support cosine c > 0), stays
+    asleep with its present velocity: slower than ``v_sleep`` (the landing speed)."""
+    return (mstate[p] == MS_REST and mplane[p] <= -2 and c > 0.0
+            and st[p, 3] ** 2 + st[p, 4] ** 2 + st[p, 5] ** 2 <= v_sleep * v_sleep)
+
+
+@njit(inline="always")
+def _slow_touch_on_sleeper(p, q, nx, ny, nz, st, mstate, mplane, v_sleep):
+    """Whether sphere p is asleep on a sphere and sphere q meets it (unit normal n from q to p)
+    with a normal approach speed of at most ``v_sleep``."""
+    if not (mstate[p] == MS_REST and mplane[p] <= -2):
+        return False
+    vn = ((st[q, 3] - st[p, 3]) * nx + (st[q, 4] - st[p, 4]) * ny
+          + (st[q, 5] - st[p, 5]) * nz)
+    return vn <= v_sleep
+
+
 @njit
 def _after_backed(p, c, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
                   rolling, rotation):
@@ -668,8 +687,7 @@ def _after_backed(p, c, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
         _enter_plane(p, np.int64(mplane[p]), t, no_end, flight, dyn, walls, gravity, pair_table,
                      fsc, friction, rolling, rotation)
         return
-    v_sleep = fsc[F_LANDING_SPEED]
-    if c > 0.0 and st[p, 3] ** 2 + st[p, 4] ** 2 + st[p, 5] ** 2 <= v_sleep * v_sleep:
+    if _stays_asleep(p, c, st, mstate, mplane, fsc[F_LANDING_SPEED]):
         _halt(p, st, dyn[0], rotation)
         return
     _leave_plane(p, flight, dyn, gravity, rotation)
@@ -1017,6 +1035,8 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                     ci = cj = 0.0  # pressed into two facing planes at once: no rigid limit
             vi0x, vi0y, vi0z = st[i, 3], st[i, 4], st[i, 5]
             vj0x, vj0y, vj0z = st[j, 3], st[j, 4], st[j, 5]
+            wi0x, wi0y, wi0z = wi[0], wi[1], wi[2]
+            wj0x, wj0y, wj0z = wj[0], wj[1], wj[2]
             inv_mi = inv_m[i] * (1.0 - ci * ci)
             inv_mj = inv_m[j] * (1.0 - cj * cj)
             row, tc_on = _tc_row(pair_table[mat[i], mat[j]], t, t_last[i], t_last[j], fsc, row_tc)
@@ -1038,25 +1058,66 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
                         cj = inv_mj = 0.0
                 else:
                     held_i = held_j = False
-            if not hit and _approaching(i, j, dx, dy, dz, ri + rj, st):
-                hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, nx, ny, nz,
-                              inv_mi, inv_mj, inv_i[i], inv_i[j], ri, rj, 1.0 / ri + 1.0 / rj,
-                              row, rec, plasticity, friction, rolling, adhesion, rotation, False)
-            if hit and (ci > 0.0 or cj > 0.0):
-                # the impulse J on i, recovered from the body that moved freely along n
-                if inv_mi >= inv_mj:
-                    jx = (st[i, 3] - vi0x) / inv_mi
-                    jy = (st[i, 4] - vi0y) / inv_mi
-                    jz = (st[i, 5] - vi0z) / inv_mi
-                else:
-                    jx = -(st[j, 3] - vj0x) / inv_mj
-                    jy = -(st[j, 4] - vj0y) / inv_mj
-                    jz = -(st[j, 5] - vj0z) / inv_mj
-                if ci > 0.0:
-                    _backed_velocity(i, vi0x, vi0y, vi0z, jx, jy, jz, bix, biy, biz, st, inv_m)
-                if cj > 0.0:
-                    _backed_velocity(j, vj0x, vj0y, vj0z, -jx, -jy, -jz, bjx, bjy, bjz, st,
-                                     inv_m)
+            hopped = hit
+            inv_ii, inv_ij = inv_i[i], inv_i[j]
+            if grav_on and not hit:
+                # a sleeper met slower than the landing speed is held where it is: such a
+                # touch cannot lift it off its support in a pile [OURS]; knocked off, it would
+                # fall asleep again at once and be knocked off again (a zero-time sequence)
+                held_i = _slow_touch_on_sleeper(i, j, nx, ny, nz, st, mstate, mplane,
+                                                fsc[F_LANDING_SPEED])
+                held_j = _slow_touch_on_sleeper(j, i, -nx, -ny, -nz, st, mstate, mplane,
+                                                fsc[F_LANDING_SPEED])
+                if held_i and held_j:
+                    held_i = held_j = False  # two sleepers never approach each other
+                if held_i:
+                    ci = inv_mi = inv_ii = 0.0
+                if held_j:
+                    cj = inv_mj = inv_ij = 0.0
+            for attempt in range(2):
+                if not hit and _approaching(i, j, dx, dy, dz, ri + rj, st):
+                    hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, nx, ny, nz,
+                                  inv_mi, inv_mj, inv_ii, inv_ij, ri, rj, 1.0 / ri + 1.0 / rj,
+                                  row, rec, plasticity, friction, rolling, adhesion, rotation,
+                                  False)
+                if hit and (ci > 0.0 or cj > 0.0):
+                    # the impulse J on i, recovered from the body that moved freely along n
+                    if inv_mi >= inv_mj:
+                        jx = (st[i, 3] - vi0x) / inv_mi
+                        jy = (st[i, 4] - vi0y) / inv_mi
+                        jz = (st[i, 5] - vi0z) / inv_mi
+                    else:
+                        jx = -(st[j, 3] - vj0x) / inv_mj
+                        jy = -(st[j, 4] - vj0y) / inv_mj
+                        jz = -(st[j, 5] - vj0z) / inv_mj
+                    if ci > 0.0:
+                        _backed_velocity(i, vi0x, vi0y, vi0z, jx, jy, jz, bix, biy, biz, st,
+                                         inv_m)
+                    if cj > 0.0:
+                        _backed_velocity(j, vj0x, vj0y, vj0z, -jx, -jy, -jz, bjx, bjy, bjz, st,
+                                         inv_m)
+                if not grav_on or not hit or hopped or held_i or held_j or attempt > 0:
+                    break
+                # A sleeper that the collision leaves asleep (see _after_backed) has not
+                # moved: the collision was with an immovable body, so it is redone as one
+                # [OURS]. Otherwise a heavier sphere meeting a lighter sleeper would keep
+                # approaching it after each collision (the sleeper's share of the momentum
+                # vanishing as it is stopped): a zero-time sequence of collisions with
+                # impulses shrinking geometrically.
+                held_i = _stays_asleep(i, ci, st, mstate, mplane, fsc[F_LANDING_SPEED])
+                held_j = _stays_asleep(j, cj, st, mstate, mplane, fsc[F_LANDING_SPEED])
+                if held_i == held_j:
+                    held_i = held_j = False  # (both: two sleepers never approach each other)
+                    break
+                st[i, 3], st[i, 4], st[i, 5] = vi0x, vi0y, vi0z
+                st[j, 3], st[j, 4], st[j, 5] = vj0x, vj0y, vj0z
+                wi[0], wi[1], wi[2] = wi0x, wi0y, wi0z
+                wj[0], wj[1], wj[2] = wj0x, wj0y, wj0z
+                if held_i:
+                    ci = inv_mi = inv_ii = 0.0
+                if held_j:
+                    cj = inv_mj = inv_ij = 0.0
+                hit = False
             if not hit:
                 # re-check failed: a grazing contact that round-off turned into "separating"
                 # (or into an approach below rounding, which _predict ignores as well).

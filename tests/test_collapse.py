@@ -10,21 +10,7 @@ import pytest
 from hsgran.engine import Simulation
 from hsgran.onplane import MS_ASLEEP, MS_REST
 from hsgran.scene import parse_scene
-
-
-def sphere(position, velocity=("0.0", "0.0", "0.0"), radius="0.001"):
-    """A steel [[particles]] table; coordinates as TOML text (numbers or format fields)."""
-    return (f"[[particles]]\nmaterial = \"steel\"\nradius = {radius}\n"
-            f"position = [{', '.join(position)}]\nvelocity = [{', '.join(velocity)}]\n")
-
-
-def plane(point, normal):
-    """A steel plane [[walls]] table; coordinates as TOML text."""
-    return (f"[[walls]]\nkind = \"plane\"\npoint = [{', '.join(point)}]\n"
-            f"normal = [{', '.join(normal)}]\nmaterial = \"steel\"\n")
-
-
-FLOOR = plane(("0.0", "0.0", "0.0"), ("0.0", "0.0", "1.0"))
+from tests.scenes import FLOOR, plane, sphere
 
 ROW = """
 [scene]
