@@ -17,5 +17,6 @@ def test_bench_engine_quick_run_prints_speed_memory_and_targets(capsys, load_too
     assert re.search(rf"^\s+1,000(\s+{NUMBER}){{2}}\s+-?{NUMBER}\s*$", out, re.MULTILINE), out
     assert re.search(rf"^granular: {NUMBER} events/s, {NUMBER} collisions/s", out,
                      re.MULTILINE), out
+    assert re.search(rf"^pile: {NUMBER} events/particle/s over the run, ", out, re.MULTILINE), out
     assert "targets:" in out
     assert "B/particle" in out
