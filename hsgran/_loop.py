@@ -664,10 +664,10 @@ def _stays_asleep(p, c, st, mstate, mplane, v_sleep):
 
 
 @njit(inline="always")
-def _slow_touch_on_sleeper(p, q, nx, ny, nz, st, mstate, mplane, v_sleep):
-    """Whether sphere p is asleep on a sphere and sphere q meets it (unit normal n from q to p)
-    with a normal approach speed of at most ``v_sleep``."""
-    if not (mstate[p] == MS_REST and mplane[p] <= -2):
+def _slow_touch_at_rest(p, q, nx, ny, nz, st, mstate, v_sleep):
+    """Whether sphere p is at rest (on a plane or asleep on a sphere) and sphere q meets it
+    (unit normal n from q to p) with a normal approach speed of at most ``v_sleep``."""
+    if mstate[p] != MS_REST:
         return False
     vn = ((st[q, 3] - st[p, 3]) * nx + (st[q, 4] - st[p, 4]) * ny
           + (st[q, 5] - st[p, 5]) * nz)
@@ -943,7 +943,10 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
         e = heap[0]
         t = key_t[0]
         if t > t_end or t == NEVER:
-            return STATUS_DONE
+            # a frame due at t_end whose time k × frame_dt rounded above it is still taken
+            # (0.3 s is not 6 × 0.05 s in floating point)
+            if not (e == n and t - t_end <= ZERO_TIME_REL * max(1.0, t_end)):
+                return STATUS_DONE
         fsc[F_T_CUR] = t
         if e == n:
             # frame tick: sample every sphere's flight at t, leave the stored states alone
@@ -1061,15 +1064,15 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
             hopped = hit
             inv_ii, inv_ij = inv_i[i], inv_i[j]
             if grav_on and not hit:
-                # a sleeper met slower than the landing speed is held where it is: such a
-                # touch cannot lift it off its support in a pile [OURS]; knocked off, it would
-                # fall asleep again at once and be knocked off again (a zero-time sequence)
-                held_i = _slow_touch_on_sleeper(i, j, nx, ny, nz, st, mstate, mplane,
-                                                fsc[F_LANDING_SPEED])
-                held_j = _slow_touch_on_sleeper(j, i, -nx, -ny, -nz, st, mstate, mplane,
-                                                fsc[F_LANDING_SPEED])
+                # a sphere at rest met slower than the landing speed is held where it is: such
+                # a touch cannot move it in a pile [OURS]; knocked off, it would stop again at
+                # once and be knocked off again (a zero-time sequence)
+                held_i = _slow_touch_at_rest(i, j, nx, ny, nz, st, mstate,
+                                             fsc[F_LANDING_SPEED])
+                held_j = _slow_touch_at_rest(j, i, -nx, -ny, -nz, st, mstate,
+                                             fsc[F_LANDING_SPEED])
                 if held_i and held_j:
-                    held_i = held_j = False  # two sleepers never approach each other
+                    held_i = held_j = False  # two resting spheres never approach each other
                 if held_i:
                     ci = inv_mi = inv_ii = 0.0
                 if held_j:
