@@ -44,6 +44,7 @@ from hsgran.materials import (
     read_toml,
     with_overrides,
 )
+from hsgran.validate import add_validate_parser, cmd_validate
 
 PROG = "hsgran"
 
@@ -507,12 +508,137 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+# ---- render and plot ---------------------------------------------------------------------
+
+_SIZE = re.compile(r"^\s*(\d+)\s*[xX]\s*(\d+)\s*$")
+
+_RENDER_EPILOG = """\
+cameras: auto (iso, or follow:0 for a lone sphere far smaller than its path), iso, side, top,
+  follow:K (follow particle K), X,Y,Z (camera position in m, looking at the scene's centre),
+  X,Y,Z:FX,FY,FZ (position and point looked at)
+colours (--color-by): speed (colour bar), state (flight, sliding, rolling, at rest, asleep),
+  material, regime (tangential regime of each sphere's last collision; needs 'run --events')
+examples:
+  hsgran render out.h5 -o movie.mp4
+  hsgran render out.h5 -o slow.gif --time-scale 0.1 --size 640x360 --color-by state
+  hsgran render out.h5 --at 0.05 -o still.png --camera follow:0
+  hsgran render out.h5 --frames frames/ --fps 25
+"""
+
+
+def _size(text: str) -> tuple[int, int]:
+    match = _SIZE.match(text)
+    if not match:
+        raise InputError(f"expected WIDTHxHEIGHT in pixels (e.g. 1280x720), got {text!r}",
+                         "--size")
+    return int(match.group(1)), int(match.group(2))
+
+
+def _add_render_parser(sub) -> None:
+    # Values and defaults are spelt out here rather than imported: importing the renderer's
+    # modules (numba, h5py) would slow down every other subcommand. tests/test_render.py checks
+    # that they match hsgran.render and hsgran.animation.
+    p = sub.add_parser(
+        "render", help="render a trajectory offscreen: MP4, GIF, PNG frames or one still",
+        description=_paragraphs(
+            "Render an HDF5 trajectory of 'hsgran run' without a display (VTK with EGL): "
+            "spheres at their true radii with a pattern that turns with their spin, plane walls "
+            "as finite patches, a time label and a colour legend. See docs/rendering.md."),
+        epilog=_RENDER_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("trajectory", metavar="OUT.h5", help="trajectory file")
+    p.add_argument("-o", "--output", metavar="FILE",
+                   help="movie (.mp4, .gif) or, with --at, still (.png); default: the "
+                        "trajectory's name with .mp4 (.png with --at)")
+    p.add_argument("--frames", metavar="DIR", help="write PNG frames into DIR instead")
+    p.add_argument("--at", metavar="T", help="render one still at simulated time T [s]")
+    p.add_argument("--start", metavar="T0", help="first simulated time of the movie [s]")
+    p.add_argument("--end", metavar="T1", help="last simulated time of the movie [s]")
+    p.add_argument("--fps", metavar="FPS", help="frames per second of video (default 30)")
+    p.add_argument("--size", metavar="WxH", help="picture size in pixels (default 1280x720; "
+                                                 "MP4 rounds up to multiples of 16)")
+    p.add_argument("--camera", metavar="CAM", default="auto",
+                   help="auto (default), iso, side, top, follow:K, X,Y,Z or X,Y,Z:FX,FY,FZ")
+    p.add_argument("--color-by", metavar="VAR", default="speed",
+                   help="what the sphere colours show: speed (default), state, material or "
+                        "regime")
+    p.add_argument("--time-scale", metavar="S",
+                   help="simulated seconds per second of video (0.1: ten times slower than "
+                        "real time; default: one movie frame per stored frame)")
+    p.add_argument("--spheres", metavar="STYLE", default="auto",
+                   help="mesh (a turning pattern), points (fast impostors with spin "
+                        "markers) or auto (default: meshes up to 50 spheres)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def cmd_render(args: argparse.Namespace) -> int:
+    """``hsgran render``: movie, frames or still of a trajectory."""
+    from hsgran.errors import MissingDependency
+    from hsgran.render import DEFAULT_FPS, DEFAULT_SIZE, render
+
+    size = DEFAULT_SIZE if args.size is None else _size(args.size)
+    fps = DEFAULT_FPS if args.fps is None else _positive(args.fps, "--fps")
+    try:
+        result = render(
+            args.trajectory, args.output, frames_dir=args.frames,
+            at=_number(args.at, "--at", "a finite number"),
+            start=_number(args.start, "--start", "a finite number"),
+            end=_number(args.end, "--end", "a finite number"),
+            fps=fps, size=size, camera=args.camera, color_by=args.color_by,
+            time_scale=_positive(args.time_scale, "--time-scale"), spheres=args.spheres,
+            force=args.force, progress=not args.no_progress)
+    except MissingDependency as exc:
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    width, height = result.size
+    what = ("still" if result.kind == "png" else
+            f"{result.frames} frames, {result.frames / result.fps:.1f} s of video at "
+            f"{result.fps:g} fps, {result.time_scale:.3g} simulated s per video s")
+    print(f"wrote {result.output}: {what}, {width}x{height}, "
+          f"{1e3 * result.seconds_per_frame:.0f} ms/frame")
+    return 0
+
+
+def _add_plot_parser(sub) -> None:
+    p = sub.add_parser(
+        "plot", help="plot energies (and, for a few particles, height, speed, spin) vs time",
+        description="Plot a trajectory with matplotlib: translational, rotational, potential "
+                    "and dissipated energy against time; for scenes of at most "
+                    "10 particles (or those picked with --particles) also "
+                    "their height, speed and spin, with the collisions of the event log "
+                    "marked ('hsgran run --events').")
+    p.add_argument("trajectory", metavar="OUT.h5", help="trajectory file")
+    p.add_argument("-o", "--output", metavar="FIG",
+                   help="figure (.png, .pdf or .svg); default: the trajectory's name with .png")
+    p.add_argument("--particles", metavar="LIST",
+                   help="particles to plot against time: comma-separated indices, 'all' or "
+                        "'none' (default: all when there are at most 10)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output")
+
+
+def cmd_plot(args: argparse.Namespace) -> int:
+    """``hsgran plot``: energies and few-particle histories of a trajectory."""
+    from hsgran.errors import MissingDependency
+    from hsgran.plot import plot
+
+    try:
+        output = plot(args.trajectory, args.output, particles=args.particles, force=args.force)
+    except MissingDependency as exc:
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(f"wrote {output}")
+    return 0
+
+
 # ---- main --------------------------------------------------------------------------------
 
 #: Handler of each subcommand: takes the parsed arguments, returns the exit code.
 HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "impact": cmd_impact,
     "run": cmd_run,
+    "render": cmd_render,
+    "plot": cmd_plot,
+    "validate": cmd_validate,
 }
 
 
@@ -526,6 +652,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     _add_impact_parser(sub)
     _add_run_parser(sub)
+    _add_render_parser(sub)
+    _add_plot_parser(sub)
+    add_validate_parser(sub)
     parser.commands = dict(sub.choices)
     return parser
 

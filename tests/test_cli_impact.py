@@ -19,6 +19,7 @@ import pytest
 from hsgran import __version__
 from hsgran.cli import main
 from hsgran.errors import EXIT_BAD_INPUT
+from tests.cli_errors import run_error
 
 STEEL_ON_STEEL = ["impact", "--sphere", "steel", "--wall", "steel", "--radius", "0.005"]
 #: Kharaz et al. 2001 / Chung & Ooi 2011 test 4 at 40° (VALIDATION.md, case CO4).
@@ -42,16 +43,6 @@ def run_json(capsys, *argv) -> dict:
     return json.loads(out, parse_constant=_strict_constant)
 
 
-def run_error(capsys, argv) -> str:
-    """Run a command that must fail on bad input; return its one stderr line."""
-    assert main(argv) == EXIT_BAD_INPUT
-    out, err = capsys.readouterr()
-    assert out == ""
-    assert err.startswith("hsgran: error: ")
-    assert err.count("\n") == 1, err
-    assert err.endswith("\n")
-    assert "Traceback" not in err
-    return err
 
 
 # ---- JSON output ---------------------------------------------------------------------------
