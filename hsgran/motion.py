@@ -284,8 +284,10 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
         # pressed together (f'' < 0) with no approach to speak of; else look further on, past
         # the first piece, where f rises from a value that is only round-off (its sign there
         # is noise, and a "root" found in it came 1e-17 s later, again and again)
+        # (pressed together: whichever side of σ round-off left them, f falls from here on, and
+        # a search past the first piece would miss that contact and let them overlap)
         noise = 2.0 * approach_noise(sigma, v_sum, x_sum)
-        if c1 < -noise or (c2 < 0.0 and c1 <= noise and c0 <= 0.0):
+        if c1 < -noise or (c2 < 0.0 and c1 <= noise):
             return 0.0
     # critical points of f' (zeros of f'' = 12 c4 τ² + 6 c3 τ + 2 c2) split [0, h] into pieces
     # on which f' is monotone; the zeros of f' found there split it into pieces where f is
