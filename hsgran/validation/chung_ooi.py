@@ -47,6 +47,7 @@ from hsgran.validation.core import (
     closed_form_tolerance,
     digitising_tolerance,
     extent,
+    finish_figure,
     half_unit,
     long_series,
     material_of,
@@ -385,9 +386,7 @@ def run_co3(ctx: CaseContext) -> CaseResult:
     ax.set_xlabel("prescribed e_n")
     ax.set_ylabel("rebound speed / impact speed")
     ax.legend(fontsize=8)
-    save_figure(fig, ctx.figure_path)
-    res.figure = ctx.figure_path
-    return res
+    return finish_figure(fig, ctx, res)
 
 
 # ---- tests 4–6: sphere on a rigid plane, tangential model ----------------------------------
@@ -989,9 +988,7 @@ def run_co7(ctx: CaseContext) -> CaseResult:
     ax.set_xlabel("initial spin ω [rad/s]")
     ax.set_ylabel("final spin [rad/s]")
     ax.legend(fontsize=8)
-    save_figure(fig, ctx.figure_path)
-    res.figure = ctx.figure_path
-    return res
+    return finish_figure(fig, ctx, res)
 
 
 # ---- registry ------------------------------------------------------------------------------

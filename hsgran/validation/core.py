@@ -618,6 +618,12 @@ def save_figure(fig, path: Path) -> Path:
     return path
 
 
+def finish_figure(fig, ctx: CaseContext, res: CaseResult) -> CaseResult:
+    """Write a case's figure to its path, record it in the result, and return the result."""
+    res.figure = save_figure(fig, ctx.figure_path)
+    return res
+
+
 #: Plot styles shared by every figure: reference data as open markers, hsgran as lines/dots.
 DATA_STYLE = {"linestyle": "none", "marker": "o", "markerfacecolor": "none", "markersize": 5}
 MODEL_STYLE = {"linewidth": 1.6}

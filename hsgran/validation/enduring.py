@@ -27,12 +27,12 @@ from hsgran.validation.core import (
     SceneText,
     ValidationError,
     closed_form_tolerance,
+    finish_figure,
     half_unit,
     material_of,
     new_figure,
     printed_rows,
     run_engine,
-    save_figure,
 )
 
 PLATE_FILE = "derived_sphere_on_plate_closed_form.csv"
@@ -185,9 +185,7 @@ def run_plate(ctx: CaseContext) -> CaseResult:
     ax.set_xlabel("time [s]")
     ax.set_ylabel("centre speed [m/s]")
     ax.legend(fontsize=6, ncol=2)
-    save_figure(fig, ctx.figure_path)
-    res.figure = ctx.figure_path
-    return res
+    return finish_figure(fig, ctx, res)
 
 
 # ---- incline -------------------------------------------------------------------------------
@@ -303,9 +301,7 @@ def run_incline(ctx: CaseContext) -> CaseResult:
     ax.set_xlabel("sliding friction μ_s")
     ax.set_ylabel("acceleration along the fall line [m/s²] (speed / t)")
     ax.legend(fontsize=8)
-    save_figure(fig, ctx.figure_path)
-    res.figure = ctx.figure_path
-    return res
+    return finish_figure(fig, ctx, res)
 
 
 CASE_PLATE = Case(

@@ -48,11 +48,11 @@ from hsgran.validation.core import (
     SceneText,
     ValidationError,
     closed_form_tolerance,
+    finish_figure,
     long_series,
     new_figure,
     roundoff_tolerance,
     run_engine,
-    save_figure,
 )
 from hsgran.validation.normal import staged_pair
 
@@ -295,9 +295,7 @@ def run_spin_wall(ctx: CaseContext) -> CaseResult:
     ax2.set_xscale("log")
     ax2.set_xlabel("tan θ_eff = |u0| / V_n")
     ax2.set_ylabel("R ω′ / V_n (spin after; lines: MODEL.md §4.3)")
-    save_figure(fig, ctx.figure_path)
-    res.figure = ctx.figure_path
-    return res
+    return finish_figure(fig, ctx, res)
 
 
 # ---- particle–particle with spin (Chung & Ooi test 8 set-up) -----------------------------
@@ -466,9 +464,7 @@ def run_pp_oblique(ctx: CaseContext) -> CaseResult:
     ax1.set_ylabel("β = −u′/u0 (relative contact-point slip)")
     ax2.set_ylabel("J_t / (μ J_n)")
     ax1.legend(fontsize=7)
-    save_figure(fig, ctx.figure_path)
-    res.figure = ctx.figure_path
-    return res
+    return finish_figure(fig, ctx, res)
 
 
 # ---- registry ------------------------------------------------------------------------------
