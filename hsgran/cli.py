@@ -17,8 +17,10 @@ import argparse
 import json
 import math
 import re
+import signal
 import sys
 import textwrap
+import threading
 from collections.abc import Callable
 from dataclasses import asdict, replace
 
@@ -44,6 +46,7 @@ from hsgran.materials import (
     read_toml,
     with_overrides,
 )
+from hsgran.sweep import add_sweep_parser, cmd_sweep
 from hsgran.validate import add_validate_parser, cmd_validate
 
 PROG = "hsgran"
@@ -474,37 +477,111 @@ def _impact_table(result: ImpactResult, inputs: dict, derived: dict, effects: Ef
 
 # ---- run ---------------------------------------------------------------------------------
 
+#: Exit codes of a run ended by a signal: 128 + the signal's number, as shells report it.
+EXIT_SIGNAL = {signal.SIGINT: 128 + signal.SIGINT, signal.SIGTERM: 128 + signal.SIGTERM}
+
+_RUN_EPILOG = """\
+checkpoints: a run with -o stores a restart state in its file every --checkpoint-wall
+  seconds of wall time (default 60), at every multiple of --checkpoint-every simulated
+  seconds if given, at the end, and when Ctrl-C or SIGTERM stops it (exit 130 / 143, after
+  the current batch of events). 'hsgran run --resume OUT.h5' continues from the last one
+  and gives, bit for bit, the frames an uninterrupted run gives; with --until it also
+  extends a finished run. A hard kill loses at most the work since the last checkpoint.
+"""
+
+
+class _StopRequest:
+    """Signal handler that asks the engine to stop after the current batch of events."""
+
+    def __init__(self):
+        self.signum: int | None = None
+
+    def __call__(self, signum, frame) -> None:
+        self.signum = self.signum or signum
+
+    def requested(self) -> bool:
+        """Whether a signal arrived."""
+        return self.signum is not None
+
+
 def _add_run_parser(sub) -> None:
     p = sub.add_parser(
         "run", help="run a scene file and write its trajectory (HDF5, H5MD 1.1)",
         description="Run a scene (TOML) with the event-driven engine and write an HDF5 "
                     "trajectory following H5MD 1.1 (layout: docs/trajectory-format.md). "
-                    "Prints a summary: events by kind, simulated time, wall time, events/s.")
-    p.add_argument("scene", metavar="SCENE.toml", help="scene file")
+                    "Prints a summary: events by kind, simulated time, wall time, events/s.",
+        epilog=_RUN_EPILOG, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scene", metavar="SCENE.toml", nargs="?", help="scene file")
     p.add_argument("-o", "--output", metavar="OUT.h5", help="trajectory file to write")
-    p.add_argument("--until", metavar="T", help="end time [s] (default: the scene's duration)")
+    p.add_argument("--resume", metavar="OUT.h5",
+                   help="continue the run of this trajectory file from its last checkpoint")
+    p.add_argument("--until", metavar="T", help="end time [s] (default: the scene's duration; "
+                   "with --resume, the end time of the original run)")
     p.add_argument("--events", action="store_true", help="record every collision in the file")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    p.add_argument("--checkpoint-every", metavar="T",
+                   help="also store a checkpoint at every multiple of T simulated seconds")
+    p.add_argument("--checkpoint-wall", metavar="S",
+                   help="store a checkpoint every S seconds of wall time (default 60; 0: only "
+                        "at the end and when interrupted)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
+def _run_options(args: argparse.Namespace) -> dict:
+    """Check the option combination of ``hsgran run``; the keyword arguments of the API."""
+    if args.resume is not None:
+        for given, option in ((args.scene, "SCENE.toml"), (args.output, "-o"),
+                              (args.events or None, "--events"), (args.force or None, "--force")):
+            if given is not None:
+                raise InputError(f"--resume continues the file's own run: drop {option}")
+    elif args.scene is None:
+        raise InputError("missing SCENE.toml (or --resume OUT.h5)")
+    wall = (None if args.checkpoint_wall is None
+            else _non_negative(args.checkpoint_wall, "--checkpoint-wall"))
+    return {
+        "until": None if args.until is None else _positive(args.until, "--until"),
+        "checkpoint_every": (None if args.checkpoint_every is None
+                             else _positive(args.checkpoint_every, "--checkpoint-every")),
+        **({} if wall is None else {"checkpoint_wall": wall or None}),
+        "progress": not args.no_progress,
+    }
+
+
 def cmd_run(args: argparse.Namespace) -> int:
-    """``hsgran run``: run a scene and write its trajectory."""
-    from hsgran.api import run_scene
+    """``hsgran run``: run a scene and write its trajectory, or resume one."""
+    from hsgran.api import resume_run, run_scene
     from hsgran.engine import SimulationError
 
-    until = None if args.until is None else _positive(args.until, "--until")
+    options = _run_options(args)
+    output = args.resume if args.resume is not None else args.output
+    request = _StopRequest()
+    # handlers can only be installed from the main thread (not when main() runs in a worker)
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = {sig: signal.signal(sig, request) for sig in EXIT_SIGNAL} if main_thread else {}
     try:
-        summary = run_scene(args.scene, args.output, until=until, log_events=args.events,
-                            progress=not args.no_progress, force=args.force,
-                            creator_args=" ".join(sys.argv))
+        if args.resume is not None:
+            summary = resume_run(args.resume, stop=request.requested, **options)
+        else:
+            summary = run_scene(args.scene, args.output, log_events=args.events,
+                                force=args.force, creator_args=" ".join(sys.argv),
+                                stop=request.requested, **options)
     except SimulationError as exc:
         print(f"{PROG}: simulation stopped: {_one_line(exc)}", file=sys.stderr)
         return 1
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     for line in summary.lines():
         print(line)
-    if args.output:
-        print(f"trajectory: {args.output}")
+    if output:
+        print(f"trajectory: {output}")
+    if summary.interrupted:
+        name = signal.Signals(request.signum).name
+        how = (f"resume with: {PROG} run --resume {output}" if output
+               else "nothing was written (no -o)")
+        print(f"{PROG}: interrupted by {name} at t = {summary.simulated_time:.9g} s; {how}",
+              file=sys.stderr)
+        return EXIT_SIGNAL[request.signum]
     return 0
 
 
@@ -601,13 +678,17 @@ def cmd_render(args: argparse.Namespace) -> int:
 
 def _add_plot_parser(sub) -> None:
     p = sub.add_parser(
-        "plot", help="plot energies (and, for a few particles, height, speed, spin) vs time",
+        "plot", help="plot energies (and, for a few particles, height, speed, spin) vs time, "
+                     "or the results of a sweep",
         description="Plot a trajectory with matplotlib: translational, rotational, potential "
                     "and dissipated energy against time; for scenes of at most "
                     "10 particles (or those picked with --particles) also "
                     "their height, speed and spin, with the collisions of the event log "
-                    "marked ('hsgran run --events').")
-    p.add_argument("trajectory", metavar="OUT.h5", help="trajectory file")
+                    "marked ('hsgran run --events'). Given the RESULTS/ folder of "
+                    "'hsgran sweep', plot each summary quantity against the swept parameters "
+                    "(docs/sweeps.md).")
+    p.add_argument("trajectory", metavar="OUT.h5|RESULTS/",
+                   help="trajectory file, or the results folder of a sweep")
     p.add_argument("-o", "--output", metavar="FIG",
                    help="figure (.png, .pdf or .svg); default: the trajectory's name with .png")
     p.add_argument("--particles", metavar="LIST",
@@ -639,6 +720,7 @@ HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "render": cmd_render,
     "plot": cmd_plot,
     "validate": cmd_validate,
+    "sweep": cmd_sweep,
 }
 
 
@@ -655,6 +737,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_render_parser(sub)
     _add_plot_parser(sub)
     add_validate_parser(sub)
+    add_sweep_parser(sub)
     parser.commands = dict(sub.choices)
     return parser
 

@@ -12,16 +12,27 @@ How a run proceeds (:meth:`Simulation.run`)::
         collision   -> advance the one or two spheres, apply the collision model, bump their
                        counters, re-predict them
         stop when the buffer is full, the event budget is spent, or the next event is past t_end
-    between compiled calls: hand full buffers to the observers, update the progress bar
+    between compiled calls: hand full buffers to the observers, update the progress bar,
+        take a checkpoint when one is due, stop early when asked to (an interrupt)
 
-Observers are plain objects with any of ``on_frames(block)``, ``on_events(block)`` and
-``on_finish(summary)``; the engine never imports a writer or a renderer.
+Observers are plain objects with any of ``on_frames(block)``, ``on_events(block)``,
+``on_checkpoint(checkpoint)`` and ``on_finish(summary)``; the engine never imports a writer or
+a renderer.
+
+Checkpoints (:meth:`Simulation.checkpoint`, :meth:`Simulation.restore`) hold every array the
+compiled loop reads or writes, except the heap: the heap is rebuilt from each sphere's pending
+event (time, sequence number), whose order is total, so a restored run pops the same events in
+the same order and continues bit for bit. They are taken only between compiled calls, when no
+event is half done and every buffered frame has been handed to the observers; where the calls
+are cut does not change the run (a call that stops at a checkpoint time leaves no pending
+re-prediction behind, and the next one starts from the same heap).
 """
 
 from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,7 +41,7 @@ from hsgran import _loop as ev
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.grid import cell_coordinates, insert, plan_grid, slot_of
-from hsgran.events.queue import new_heap
+from hsgran.events.queue import heap_build, new_heap
 from hsgran.materials import SOLID_SPHERE_INERTIA
 from hsgran.onplane import CONVENTION_A, CONVENTION_B
 
@@ -40,8 +51,17 @@ FRAME_BUFFER_BYTES = 32 * 2**20
 FRAME_BUFFER_MAX = 1000
 #: Event-log entries buffered before they are handed to observers.
 LOG_BUFFER = 1 << 16
-#: Collisions executed per compiled call between progress updates.
+#: Collisions executed per compiled call between progress updates. It also bounds how long an
+#: interrupt waits for the engine to notice it (~0.5 s at the measured 4e5 events/s).
 EVENTS_PER_CALL = 200_000
+#: Version of the checkpoint layout (:meth:`Simulation.checkpoint`); a checkpoint of another
+#: version is refused rather than misread.
+CHECKPOINT_VERSION = 1
+#: Array groups of ``hsgran._loop`` whose arrays a checkpoint holds (the frame and log buffers,
+#: the seventh group, are empty at every checkpoint).
+CHECKPOINT_GROUPS = ("flight", "dyn", "walls", "space", "grid", "sched")
+#: Entries of the ``sched`` group that make up the heap: rebuilt, not stored.
+HEAP_ENTRIES = 4
 
 
 class SimulationError(HsgranError):
@@ -88,6 +108,7 @@ class RunSummary:
     wall_time: float = 0.0  #: [s]
     collisions: int = 0  #: pair + wall events
     events_per_second: float = 0.0  #: all executed events (collisions and cell crossings) / s
+    interrupted: bool = False  #: the run stopped early because ``stop()`` said so
 
     def lines(self) -> list[str]:
         """Human-readable summary."""
@@ -95,6 +116,26 @@ class RunSummary:
         return [f"events: {by_kind or 'none'}",
                 f"simulated time {self.simulated_time:.6g} s, wall time {self.wall_time:.3f} s, "
                 f"{self.events_per_second:,.0f} events/s"]
+
+
+@dataclass
+class Checkpoint:
+    """A complete restart state of a :class:`Simulation` (see the module notes).
+
+    Attributes:
+        arrays: Every state array by name (``flight0`` … ``sched4``, ``fsc``, ``isc``,
+            ``counts``, ``rec``); copies, not views.
+        time: Time of the last processed event, or the end of the last call [s].
+        frames: Frames handed to the observers so far.
+        events: Event-log entries handed to the observers so far.
+        version: :data:`CHECKPOINT_VERSION` of the layout.
+    """
+
+    arrays: dict
+    time: float
+    frames: int
+    events: int
+    version: int = CHECKPOINT_VERSION
 
 
 #: Cache-line size [bytes] to which the per-sphere rows are aligned.
@@ -223,6 +264,7 @@ class Simulation:
         self.log_f = np.zeros((nl, 4))
         self.log_i = np.zeros((nl, 5), dtype=np.int64)
         self._frames_emitted = 0
+        self._events_emitted = 0
         # the frame tick at t = 0 goes first among simultaneous entries (lowest sequence number)
         self.ev_t[n] = 0.0
         self.ev_seq[n] = 0
@@ -296,9 +338,76 @@ class Simulation:
             return None
         f, i = self.log_f[:m], self.log_i[:m]
         self.isc[ev.I_N_LOG] = 0
+        self._events_emitted += m
         return EventBlock(f[:, 0].copy(), i[:, 0].astype(np.int8), i[:, 1].copy(),
                           i[:, 2].copy(), f[:, 1].copy(), f[:, 2].copy(), f[:, 3].copy(),
                           i[:, 3].astype(np.int8), i[:, 4].astype(np.int8))
+
+    def _state_arrays(self) -> dict:
+        """The arrays a checkpoint holds, by name (views of the live arrays)."""
+        arrays = {}
+        for name, group in zip(CHECKPOINT_GROUPS, self._groups, strict=False):
+            stored = len(group) - (HEAP_ENTRIES if name == "sched" else 0)
+            for k in range(stored):
+                arrays[f"{name}{k}"] = group[k]
+        arrays.update(fsc=self.fsc, isc=self.isc, counts=self.counts, rec=self.rec)
+        return arrays
+
+    def checkpoint(self) -> Checkpoint:
+        """A restart state of the run as it stands (call between runs or from ``on_checkpoint``).
+
+        Returns:
+            A :class:`Checkpoint` whose arrays are copies.
+
+        Raises:
+            SimulationError: frames or log entries are still buffered (they belong to the
+                observers before a checkpoint can describe what they have received).
+        """
+        if self.isc[ev.I_N_FRAMES] or self.isc[ev.I_N_LOG]:
+            raise SimulationError("checkpoint with buffered frames or events: flush them first")
+        return Checkpoint({k: a.copy() for k, a in self._state_arrays().items()},
+                          self.time, self._frames_emitted, self._events_emitted)
+
+    def checkpoint_layout(self) -> dict:
+        """Shape and dtype of every checkpoint array, by name (for writers that preallocate)."""
+        return {k: (a.shape, a.dtype) for k, a in self._state_arrays().items()}
+
+    def restore(self, checkpoint: Checkpoint) -> None:
+        """Continue from ``checkpoint``: copy its arrays in and rebuild the heap.
+
+        Args:
+            checkpoint: Taken from a simulation of the same scene (and event logging).
+
+        Raises:
+            SimulationError: the checkpoint's version, names, shapes or types do not match.
+        """
+        if checkpoint.version != CHECKPOINT_VERSION:
+            raise SimulationError(f"checkpoint version {checkpoint.version} is not "
+                                  f"{CHECKPOINT_VERSION}, the one this hsgran reads")
+        live = self._state_arrays()
+        if set(checkpoint.arrays) != set(live):
+            missing = sorted(set(live) ^ set(checkpoint.arrays))
+            raise SimulationError(f"checkpoint does not match the scene (arrays {missing})")
+        for name, target in live.items():
+            source = np.asarray(checkpoint.arrays[name])
+            if source.shape != target.shape or source.dtype != target.dtype:
+                raise SimulationError(
+                    f"checkpoint does not match the scene: {name} is {source.dtype}"
+                    f"{list(source.shape)}, expected {target.dtype}{list(target.shape)}")
+        for name, target in live.items():
+            target[...] = checkpoint.arrays[name]
+        sched = self._groups[5]
+        heap_build(sched[5], sched[6], sched[7], sched[8], sched[0], sched[1])
+        self._frames_emitted = int(checkpoint.frames)
+        self._events_emitted = int(checkpoint.events)
+
+    def _checkpoint(self, observers) -> None:
+        self._flush(observers)
+        wanted = [ob for ob in observers if hasattr(ob, "on_checkpoint")]
+        if wanted:
+            ck = self.checkpoint()
+            for ob in wanted:
+                ob.on_checkpoint(ck)
 
     def _flush(self, observers) -> None:
         frames = self._frame_block()
@@ -313,15 +422,26 @@ class Simulation:
                     ob.on_events(events)
 
     def run(self, until: float | None = None, *, max_collisions: int | None = None,
-            observers=(), progress: bool = False) -> RunSummary:
+            observers=(), progress: bool = False, checkpoint_every: float | None = None,
+            checkpoint_wall: float | None = None,
+            stop: Callable[[], bool] | None = None) -> RunSummary:
         """Run until time ``until`` [s] (default: the scene's duration) or a collision count.
 
         Args:
             until: End time [s]; frames are sampled at every multiple of the frame interval up
                 to and including it.
             max_collisions: Stop after this many more collisions (pair and wall events).
-            observers: Objects with optional ``on_frames``, ``on_events``, ``on_finish``.
+            observers: Objects with optional ``on_frames``, ``on_events``, ``on_checkpoint``,
+                ``on_finish``.
             progress: Show a tqdm progress bar over simulated time.
+            checkpoint_every: Hand a checkpoint to the observers at every multiple of this
+                simulated time [s] (``None``: not by simulated time).
+            checkpoint_wall: ... and whenever this much wall time [s] has passed since the
+                last one (``None``: not by wall time). A checkpoint is also handed over when the
+                run reaches ``until`` and when ``stop`` ends it.
+            stop: Called between compiled calls (at most :data:`EVENTS_PER_CALL` collisions
+                apart); when it returns True the run flushes, hands over a checkpoint and
+                returns with ``interrupted`` set.
 
         Returns:
             :class:`RunSummary` of this call.
@@ -330,9 +450,10 @@ class Simulation:
             SimulationError: the collapse guard stopped the run (see ``hsgran._loop``).
         """
         t_end = self.scene.duration if until is None else float(until)
-        self.fsc[ev.F_T_END] = t_end
         counts0 = self.counts.copy()
         done0 = self.collisions
+        t_ck = (math.inf if not checkpoint_every
+                else (math.floor(self.time / checkpoint_every) + 1) * checkpoint_every)
         bar = None
         if progress:
             from tqdm import tqdm
@@ -340,6 +461,8 @@ class Simulation:
             bar = tqdm(total=t_end, unit="s(sim)", bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g}"
                        " s [{elapsed}<{remaining}, {postfix}]")
         wall0 = time.perf_counter()
+        wall_ck = wall0
+        interrupted = finished = False
         try:
             while True:
                 budget = EVENTS_PER_CALL
@@ -347,6 +470,8 @@ class Simulation:
                     budget = min(budget, max_collisions - (self.collisions - done0))
                     if budget <= 0:
                         break
+                # a call ends at the next checkpoint time; cutting the run there changes nothing
+                self.fsc[ev.F_T_END] = min(t_end, t_ck)
                 status = self._call(budget)
                 if status in (ev.STATUS_FRAMES_FULL, ev.STATUS_LOG_FULL):
                     self._flush(observers)
@@ -358,21 +483,36 @@ class Simulation:
                     raise SimulationError(
                         f"sphere {i} had more than {ev.MAX_ZERO_TIME_EVENTS} collisions without "
                         f"time advancing at t = {self.time:.9g} s (inelastic collapse)")
-                if status == ev.STATUS_DONE:
+                if status == ev.STATUS_DONE and t_ck >= t_end:
                     self.fsc[ev.F_T_CUR] = max(self.time, t_end)
+                    finished = True
                     break
+                if stop is not None and stop():
+                    interrupted = True
+                    break
+                if status == ev.STATUS_DONE:  # at a checkpoint time
+                    t_ck += checkpoint_every
+                    self._checkpoint(observers)
+                    wall_ck = time.perf_counter()
+                elif (checkpoint_wall is not None
+                      and time.perf_counter() - wall_ck >= checkpoint_wall):
+                    self._checkpoint(observers)
+                    wall_ck = time.perf_counter()
         finally:
-            wall = time.perf_counter() - wall0
             if bar is not None:
                 bar.close()
             self._flush(observers)  # whatever ends the run, buffered frames and events reach disk
+        if finished or interrupted:
+            self._checkpoint(observers)
+        wall = time.perf_counter() - wall0
         d = self.counts - counts0
         names = ev.EVENT_NAMES
         events = {names[k]: int(d[k]) for k in range(1, len(names))}
         executed = events["pair"] + events["wall"] + events["cell"]
         summary = RunSummary(events=events, simulated_time=min(self.time, t_end), wall_time=wall,
                              collisions=events["pair"] + events["wall"],
-                             events_per_second=executed / wall if wall > 0 else math.inf)
+                             events_per_second=executed / wall if wall > 0 else math.inf,
+                             interrupted=interrupted)
         for ob in observers:
             if hasattr(ob, "on_finish"):
                 ob.on_finish(summary)

@@ -40,6 +40,9 @@ EVENT_MARKERS = ((EV_PAIR, "sphere-sphere collision", "o"),
                  (EV_STATE, "motion-state change", "d"),
                  (EV_LAND, "landing", "s"))
 
+#: Figure of a sweep's results folder when no output is given.
+SWEEP_FIGURE = "summary.png"
+
 ENERGY_CURVES = (("kinetic_energy_translational", "translational kinetic", "C0"),
                  ("kinetic_energy_rotational", "rotational kinetic", "C1"),
                  ("potential_energy", "potential (change since start)", "C2"),
@@ -208,12 +211,15 @@ def _event_legend(ax, events, handles, labels):
 
 
 def plot(trajectory, output=None, *, particles=None, force: bool = False) -> Path:
-    """Plot a trajectory file to a figure file.
+    """Plot a trajectory file, or the results folder of a sweep, to a figure file.
 
     Args:
-        trajectory: HDF5 trajectory written by ``hsgran run``.
-        output: ``.png``, ``.pdf`` or ``.svg``; default: the trajectory's name with ``.png``.
-        particles: See :func:`select_particles`.
+        trajectory: HDF5 trajectory written by ``hsgran run``, or a results folder of
+            ``hsgran sweep`` (then each summary quantity against the swept keys; see
+            :mod:`hsgran.sweep.figure`).
+        output: ``.png``, ``.pdf`` or ``.svg``; default: the trajectory's name with ``.png``,
+            or ``RESULTS/summary.png``.
+        particles: See :func:`select_particles` (trajectories only).
         force: Overwrite an existing output.
 
     Returns:
@@ -225,7 +231,12 @@ def plot(trajectory, output=None, *, particles=None, force: bool = False) -> Pat
         MissingDependency: matplotlib is not installed.
     """
     path = Path(trajectory)
-    target = path.with_suffix(".png") if output is None else Path(output)
+    sweep = path.is_dir()
+    if sweep and particles is not None:
+        raise InputError("applies to a trajectory, not to a sweep's results folder",
+                         "--particles")
+    default = path / SWEEP_FIGURE if sweep else path.with_suffix(".png")
+    target = default if output is None else Path(output)
     fmt = FORMATS.get(target.suffix.lower())
     if fmt is None:
         raise InputError(f"unknown figure type '{target.suffix or target.name}': use "
@@ -236,11 +247,16 @@ def plot(trajectory, output=None, *, particles=None, force: bool = False) -> Pat
         raise InputError(f"folder {target.parent} does not exist", "-o")
     if target.exists() and not force:
         raise InputError(f"{target} exists: pass --force to overwrite it", "-o")
-    traj = read_trajectory(path)
-    if traj.n_frames == 0:
-        raise InputError(f"{path} has no frames")
-    chosen = select_particles(particles, traj.n_particles)
-    fig = figure(traj, chosen, title=_scene_name(traj.scene_text) or path.name)
+    if sweep:
+        from hsgran.sweep.figure import sweep_figure
+
+        fig = sweep_figure(path, _import_matplotlib()[0])
+    else:
+        traj = read_trajectory(path)
+        if traj.n_frames == 0:
+            raise InputError(f"{path} has no frames")
+        chosen = select_particles(particles, traj.n_particles)
+        fig = figure(traj, chosen, title=_scene_name(traj.scene_text) or path.name)
     handle, name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".part{target.suffix}",
                                     dir=target.parent)
     os.close(handle)

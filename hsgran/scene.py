@@ -62,7 +62,7 @@ each takes uniform candidate centres until one clears the walls and everything a
 a bounded number of candidates is an error naming how many spheres it placed. The final overlap
 check of all spheres uses :class:`scipy.spatial.cKDTree` (periodic images included).
 
-Layer 4: imports ``errors``, ``_jit``, ``effects`` and ``materials``.
+Layer 4: imports ``errors``, ``_jit``, ``effects``, ``materials`` and ``overrides``.
 """
 
 from __future__ import annotations
@@ -85,6 +85,8 @@ from hsgran.materials import (
     pair_row,
     solid_sphere_mass,
 )
+from hsgran.overrides import apply_overrides, names_override
+from hsgran.system import available_memory
 
 # ---- limits and tolerances ---------------------------------------------------------------
 
@@ -95,8 +97,21 @@ STANDARD_GRAVITY = (0.0, 0.0, -9.81)
 #: grid and output buffers cost roughly :data:`BYTES_PER_PARTICLE` each, so 5×10⁷ particles is
 #: already ~50 GB; refusing before allocating anything turns a typo into a message, not a crash.
 MAX_PARTICLES = 50_000_000
-#: Rough memory cost of one particle across engine, queue, grid and output buffers [bytes].
-BYTES_PER_PARTICLE = 1024
+#: Memory cost of one particle across scene building, engine, queue, grid, output buffers and
+#: a checkpoint copy [bytes]: peak RSS measured at 0.58 kB (10⁶ spheres) to 0.94 kB (2×10⁵, where
+#: the fixed 32 MB frame buffer weighs more) per sphere with every effect on, plus 0.33 kB for
+#: the copy a checkpoint makes of the state.
+BYTES_PER_PARTICLE = 1536
+#: Share of the memory available when the scene is read that a run may plan to use: the rest
+#: is headroom for the estimate's error and for the other processes on the machine.
+MEMORY_SHARE = 0.8
+
+#: Largest speed a scene may give a sphere, or a sphere's surface by its spin [m/s]. Beyond the
+#: sound speed of every solid (~6 km/s in steel) impacts are hypervelocity: the quasi-static
+#: contact law of MODEL.md §3 stopped holding long before, and past this the numbers are typos.
+MAX_SPEED = 1e4
+#: Largest gravitational acceleration [m/s²]: ~10⁶ g, the top of ultracentrifuges.
+MAX_GRAVITY = 1e7
 
 #: Largest scene file read [bytes]. tomllib holds a parsed [[particles]] entry in roughly 2 kB of
 #: Python objects, so a 256 MB file of explicit particles already needs several GB; larger sets
@@ -216,6 +231,8 @@ class Scene:
             rolling), MODEL §5.3.
         tc_time: TC-model time [s]: collisions of a sphere closer together than this are
             elastic (0: off).
+        overrides: Key path → value changes applied to the file before validation
+            (:mod:`hsgran.overrides`); ``text`` then ends with :func:`override_note`.
     """
 
     name: str
@@ -240,6 +257,7 @@ class Scene:
     landing_speed: float = DEFAULT_LANDING_SPEED
     rolling_convention: str = "A"
     tc_time: float = DEFAULT_TC_TIME
+    overrides: dict = field(default_factory=dict)
 
     @property
     def n(self) -> int:
@@ -279,11 +297,13 @@ class Scene:
 
 # ---- entry points ------------------------------------------------------------------------
 
-def load_scene(path: str | Path) -> Scene:
+def load_scene(path: str | Path, *, overrides=None) -> Scene:
     """Read and validate a scene file.
 
     Args:
         path: Path of a TOML scene file.
+        overrides: Key path → value changes applied before validation (see
+            :mod:`hsgran.overrides`), or ``None``.
 
     Returns:
         The validated :class:`Scene`.
@@ -303,15 +323,19 @@ def load_scene(path: str | Path) -> Scene:
         raise InputError(f"file not found: {p}") from None
     except (IsADirectoryError, PermissionError, UnicodeDecodeError) as exc:
         raise InputError(f"cannot read {p}: {exc.__class__.__name__}") from None
-    return parse_scene(text, source=str(p))
+    return parse_scene(text, source=str(p), overrides=overrides)
 
 
-def parse_scene(text: str, source: str = "<string>") -> Scene:
+def parse_scene(text: str, source: str = "<string>", *, overrides=None) -> Scene:
     """Validate the text of a scene file.
 
     Args:
         text: TOML text.
         source: Where the text comes from (kept in :attr:`Scene.source`, used in messages).
+        overrides: Key path → value changes applied to the parsed document before validation
+            (see :mod:`hsgran.overrides`), or ``None``. :attr:`Scene.text` then ends with them
+            as comments, so a trajectory records what was run; an error in a value they set
+            names the override.
 
     Returns:
         The validated :class:`Scene`.
@@ -323,7 +347,25 @@ def parse_scene(text: str, source: str = "<string>") -> Scene:
         doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{source}: TOML syntax error: {exc}") from None
-    return _SceneBuilder(doc, text, source).build()
+    if not overrides:
+        return _SceneBuilder(doc, text, source).build()
+    doc = apply_overrides(doc, overrides)
+    text += override_note(overrides)
+    try:
+        scene = _SceneBuilder(doc, text, source).build()
+        scene.overrides = dict(overrides)
+        return scene
+    except InputError as exc:
+        path = names_override(exc.key, overrides)
+        if path is None:
+            raise
+        raise InputError(f"{exc} (value set by the override {path})") from None
+
+
+def override_note(overrides) -> str:
+    """The comment lines :func:`parse_scene` appends to :attr:`Scene.text` for ``overrides``
+    (so that a trajectory's scene text says what was run)."""
+    return "".join(f"\n# override: {k} = {v!r}" for k, v in overrides.items())
 
 
 # ---- small validators --------------------------------------------------------------------
@@ -363,6 +405,15 @@ def _vector(value, key: str) -> np.ndarray:
     if not isinstance(value, list) or len(value) != 3:
         raise InputError(f"must be a list of 3 numbers [x, y, z], got {short_repr(value)}", key)
     return np.array([check_number(v, f"{key}[{i}]") for i, v in enumerate(value)])
+
+
+def _check_magnitude(vector: np.ndarray, limit: float, unit: str, key: str) -> None:
+    """Refuse a vector longer than ``limit`` (see :data:`MAX_SPEED`, :data:`MAX_GRAVITY`)."""
+    with np.errstate(over="ignore"):  # 1e300 squared is inf, which is refused below
+        size = float(np.sqrt(np.sum(np.square(vector, dtype=np.float64))))
+    if not size <= limit:
+        raise InputError(f"magnitude {size:.3g} is beyond {limit:.0e} {unit}: not a physical "
+                         "value for this model", key)
 
 
 def _string(value, key: str) -> str:
@@ -501,6 +552,7 @@ class _SceneBuilder:
         self.effects = Effects.parse(sc.get("effects", []), "scene.effects")
         if "gravity" in sc:
             g = _vector(sc["gravity"], "scene.gravity")
+            _check_magnitude(g, MAX_GRAVITY, "m/s^2", "scene.gravity")
             if not self.effects.gravity:
                 raise InputError("listed but the 'gravity' effect is off: add \"gravity\" to "
                                  "scene.effects or remove scene.gravity", "scene.gravity")
@@ -662,7 +714,10 @@ class _SceneBuilder:
                                f"{key}.position")
             velocity = _vector(p["velocity"], f"{key}.velocity") if "velocity" in p \
                 else np.zeros(3)
+            _check_magnitude(velocity, MAX_SPEED, "m/s", f"{key}.velocity")
             omega = self._angular_velocity(p, key)
+            _check_magnitude(omega * radius, MAX_SPEED, "m/s (surface speed |ω| R)",
+                             f"{key}.angular_velocity")
             out.append(dict(key=key, material=material, radius=radius, position=position,
                             velocity=velocity, angular_velocity=omega))
         return out
@@ -728,24 +783,35 @@ class _SceneBuilder:
             speed = check_number(f.get("speed", 0.0), f"{key}.speed")
             if speed < 0.0:
                 raise InputError(f"must be >= 0 m/s, got {f['speed']!r}", f"{key}.speed")
+            _check_magnitude(np.array([speed]), MAX_SPEED, "m/s", f"{key}.speed")
             omega = self._angular_velocity(f, key)
+            _check_magnitude(omega * r_max, MAX_SPEED, "m/s (surface speed |ω| R)",
+                             f"{key}.angular_velocity")
             fills.append(_Fill(key, count, material, (r_min, r_max), lower, upper, speed, omega))
         self.fill_ranges: list[tuple[str, int, int]] = []
         return fills
 
     def _check_total(self, n_explicit: int, fills: list[_Fill]) -> None:
+        """Refuse, before allocating anything, a particle count beyond the hard limit or
+        beyond the memory this machine has available now (the key named is the fill, or the
+        particle list, that crosses the line)."""
+        available = available_memory()
+        budget = math.inf if available is None else MEMORY_SHARE * available
         total = n_explicit
-        for f in fills:
-            total += f.count
+        for key, count in [("particles", n_explicit)] + [(f"{f.key}.count", f.count)
+                                                          for f in fills]:
+            total += count if key != "particles" else 0
+            need = total * BYTES_PER_PARTICLE
             if total > MAX_PARTICLES:
                 raise InputError(
                     f"the scene asks for {total:.3g} particles so far, more than the limit of "
-                    f"{MAX_PARTICLES:.0e} (at ~{BYTES_PER_PARTICLE // 1024} KB per particle that "
-                    f"would need ~{total * BYTES_PER_PARTICLE / 1e9:.0f} GB of memory)",
-                    f"{f.key}.count")
-        if total > MAX_PARTICLES:  # only reachable with absurd [[particles]] lists
-            raise InputError(f"{total} particles, more than the limit of {MAX_PARTICLES:.0e}",
-                             "particles")
+                    f"{MAX_PARTICLES:.0e} (at ~{BYTES_PER_PARTICLE / 1024:.1f} kB per particle "
+                    f"that would need ~{need / 1e9:.0f} GB of memory)", key)
+            if need > budget:
+                raise InputError(
+                    f"{total:,} particles need ~{need / 1e9:.3g} GB of memory (~"
+                    f"{BYTES_PER_PARTICLE / 1024:.1f} kB each), more than this machine can give "
+                    f"({available / 1e9:.3g} GB available)", key)
 
     def _place(self, f: _Fill, placed_pos: np.ndarray, placed_rad: np.ndarray):
         """Draw radii, positions and velocities of one fill (see the module docstring)."""

@@ -11,6 +11,7 @@ PACKAGE = Path(hsgran.__file__).parent
 LAYERS = {
     "__init__": 0,
     "errors": 0,
+    "system": 0,
     "_jit": 0,
     "effects": 1,
     "materials": 1,
@@ -24,9 +25,11 @@ LAYERS = {
     "events.": 3,
     "impact": 4,
     "scene": 4,
+    "overrides": 4,
     "physics": 4,
     "engine": 5,
     "reference": 5,
+    "dem.": 5,
     "io.": 5,
     "render": 6,
     "animation": 6,
@@ -35,6 +38,7 @@ LAYERS = {
     "validation.": 6,
     "cli": 6,
     "api": 6,
+    "sweep.": 6,
     "__main__": 6,
 }
 

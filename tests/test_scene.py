@@ -480,7 +480,15 @@ BROKEN = [
     ("empty-scene", scene_text(body=""), "particles", "no particles"),
     ("particles-as-table", scene_text(body=BALL.replace("[[particles]]", "[particles]")),
      "particles", "array of tables"),
-    ("too-many-particles", fill_text(count=60_000_000), "fill[0].count", "KB per particle"),
+    ("too-many-particles", fill_text(count=60_000_000), "fill[0].count", "kB per particle"),
+    ("gravity-absurd", scene_text(scene='effects = ["gravity"]\ngravity = [0.0, 0.0, -1e300]'),
+     "scene.gravity", "not a physical value"),
+    ("speed-absurd", scene_text(body=BALL + "velocity = [0.0, 3e4, 0.0]\n"),
+     "particles[0].velocity", "beyond 1e+04 m/s"),
+    ("spin-absurd", scene_text(scene='effects = ["rotation"]',
+                               body=BALL + "angular_velocity = [0.0, 3e6, 0.0]\n"),
+     "particles[0].angular_velocity", "surface speed"),
+    ("fill-speed-absurd", fill_text(speed=2e4), "fill[0].speed", "beyond 1e+04 m/s"),
     ("fill-count-zero", fill_text(count=0), "fill[0].count", ">= 1"),
     ("fill-count-fraction", fill_text(count=1.5), "fill[0].count", "whole number"),
     ("fill-radius-reversed", fill_text(radius="[0.003, 0.001]"), "fill[0].radius", "exceeds"),
@@ -531,3 +539,13 @@ def test_scene_name_defaults_to_the_file_name(tmp_path):
     path = tmp_path / "my_drop.toml"
     path.write_text(scene_text())
     assert load_scene(path).name == "my_drop"
+
+
+def test_a_scene_larger_than_the_memory_available_is_refused_before_allocating(monkeypatch):
+    monkeypatch.setattr(scene_module, "available_memory", lambda: 10**9)  # a 1 GB machine
+    limit = int(scene_module.MEMORY_SHARE * 10**9 / scene_module.BYTES_PER_PARTICLE)
+    with pytest.raises(InputError) as err:
+        parse_scene(fill_text(count=limit + 1))
+    assert err.value.key == "fill[0].count"
+    assert "GB of memory" in str(err.value)
+    assert "1 GB available" in str(err.value)
