@@ -80,7 +80,10 @@ class FrameBlock:
     kinetic_translational: np.ndarray  #: Σ ½ m v² [J] (F,)
     kinetic_rotational: np.ndarray | None  #: Σ ½ I ω² [J] (F,)
     potential: np.ndarray  #: −Σ m g·x [J] (F,)
-    dissipated: np.ndarray  #: energy dissipated by collisions since t = 0 [J] (F,)
+    #: energy dissipated since t = 0 [J] (F,): the initial mechanical energy minus the present
+    #: one (:meth:`Simulation.mechanical_energy`), so it counts every loss: collisions, sliding
+    #: friction and rolling resistance on planes, landings and spheres put to rest
+    dissipated: np.ndarray
     motion_state: np.ndarray  #: ``hsgran.onplane.MS_*`` of every sphere (F, N) int8
 
 
@@ -138,6 +141,11 @@ class Checkpoint:
     version: int = CHECKPOINT_VERSION
 
 
+def _mechanical(kin_t, kin_r, pot):
+    """Kinetic (translational and, when given, rotational) plus potential energy [J]."""
+    return kin_t + (kin_r if kin_r is not None else 0.0) + pot
+
+
 #: Cache-line size [bytes] to which the per-sphere rows are aligned.
 CACHE_LINE = 64
 
@@ -191,6 +199,10 @@ class Simulation:
         self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)
         self.inv_m = 1.0 / self.mass
         self.inv_i = 1.0 / (SOLID_SPHERE_INERTIA * self.mass * self.radius**2)
+        self.inertia = SOLID_SPHERE_INERTIA * self.mass * self.radius**2  # [kg m²]
+        #: mechanical energy of the scene as given [J] (before spheres are put on planes)
+        self.energy0 = float(_mechanical(*self._energies(
+            self.pos[None], self.vel[None], self.omg[None] if self.rotation else None))[0])
         self.mat = np.ascontiguousarray(scene.material, dtype=np.int32)
         self.counter = np.zeros(n, dtype=np.int64)
         self.zstreak = np.zeros(n, dtype=np.int32)
@@ -311,6 +323,35 @@ class Simulation:
         g = self.acc if self.scene.effects.gravity else self.gravity[None, :]
         return self.pos + dt * (self.vel + 0.5 * g * dt), self.vel + g * dt
 
+    def _energies(self, pos, vel, omg):
+        """(translational, rotational or None, potential) energy of frames [J], each (F,).
+
+        Potential energy is −Σ m g·x (zero at the origin); on a periodic axis along which
+        gravity acts it jumps when a sphere wraps, and so does the dissipated energy.
+        """
+        kin_t = 0.5 * np.einsum("n,fnk,fnk->f", self.mass, vel, vel)
+        kin_r = (0.5 * np.einsum("n,fnk,fnk->f", self.inertia, omg, omg)
+                 if omg is not None else None)
+        pot = -np.einsum("n,fnk,k->f", self.mass, pos, self.gravity)
+        return kin_t, kin_r, pot
+
+    def mechanical_energy(self, t: float | None = None) -> float:
+        """Kinetic (both kinds) plus potential energy of all spheres at ``t`` ≥ the last event
+        (default: the time of the last event) [J]."""
+        t = self.time if t is None else t
+        pos, vel = self.state_at(t)
+        omg = None
+        if self.rotation:
+            omg = self.omg + (self.alpha * (t - self.t_loc)[:, None]
+                              if self.scene.effects.gravity else 0.0)
+        return float(_mechanical(*self._energies(pos[None], vel[None],
+                                                 None if omg is None else omg[None]))[0])
+
+    def dissipated_energy(self, t: float | None = None) -> float:
+        """Energy dissipated since t = 0, up to ``t`` [J]: the initial mechanical energy minus
+        that at ``t`` (see :class:`FrameBlock`)."""
+        return self.energy0 - self.mechanical_energy(t)
+
     def _call(self, max_events: int) -> int:
         return ev.run_loop(*self._groups, self.pair_table, self.fsc, self.isc, self.counts,
                            max_events, self.rec, self.flags)
@@ -322,15 +363,13 @@ class Simulation:
         pos = self.fr_pos[:f].copy()
         vel = self.fr_vel[:f].copy()
         omg = self.fr_omg[:f].copy() if self.rotation else None
-        kin_t = 0.5 * np.einsum("n,fnk,fnk->f", self.mass, vel, vel)
-        kin_r = (0.5 * np.einsum("n,fnk,fnk->f", self.mass * SOLID_SPHERE_INERTIA
-                                 * self.radius**2, omg, omg) if self.rotation else None)
-        pot = -np.einsum("n,fnk,k->f", self.mass, pos, self.gravity)
+        kin_t, kin_r, pot = self._energies(pos, vel, omg)
+        dissipated = self.energy0 - _mechanical(kin_t, kin_r, pot)
         step = np.arange(self._frames_emitted, self._frames_emitted + f, dtype=np.int64)
         self._frames_emitted += f
         self.isc[ev.I_N_FRAMES] = 0
         return FrameBlock(step, self.fr_time[:f].copy(), pos, vel, omg, kin_t, kin_r, pot,
-                          self.fr_diss[:f].copy(), self.fr_ms[:f].copy())
+                          dissipated, self.fr_ms[:f].copy())
 
     def _event_block(self) -> EventBlock | None:
         m = int(self.isc[ev.I_N_LOG])

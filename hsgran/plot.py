@@ -2,10 +2,11 @@
 
 One figure: the energies against time (translational and rotational kinetic energy, the change
 of potential energy since the start, the energy dissipated so far, and their sum, which stays at
-the initial kinetic energy when the books balance); and, for a few particles, their height,
-speed and spin against time with the collisions and motion-state changes of the event log
-marked on each curve. matplotlib is used through its object interface with the Agg canvas, so
-nothing touches pyplot's global state or needs a display.
+the initial kinetic energy: the dissipated energy is what the mechanical energy lost); and, for
+a few particles, their height, speed and spin against time with the collisions and
+motion-state changes of the event log marked on each curve. matplotlib is used through its
+object interface with the Agg canvas, so nothing touches pyplot's global state or needs a
+display.
 """
 
 from __future__ import annotations

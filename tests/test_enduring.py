@@ -285,3 +285,42 @@ def test_trajectory_frames_record_sliding_rolling_and_rest_at_the_closed_form_ti
     want = np.where(traj.time < t1, MS_SLIDING, np.where(traj.time < t2, MS_ROLLING, MS_REST))
     np.testing.assert_array_equal(traj.motion_state[:, 0], want)
     assert {MS_SLIDING, MS_ROLLING, MS_REST} <= set(traj.motion_state[:, 0].tolist())
+
+
+#: Relative tolerance of the energy books of a sphere on a plate: the initial energy, the
+#: closed-form loss and the frame energies are sums of a few products each.
+ENERGY_RTOL = 1e-12
+
+
+@pytest.mark.parametrize("case", CASES[:3], ids=["plain", "backspin", "topspin"])
+def test_energy_lost_on_a_plate_is_dissipated_energy_and_follows_the_closed_form(case):
+    """Sliding friction and rolling resistance on a plane are counted as dissipated (MODEL.md
+    §5.3): at rest everything the sphere had is dissipated, and at the end of sliding the loss
+    is the closed form's."""
+    v0, omega0, r = case[:3]
+    t1, v1, _, t2, _ = closed_form(*case, "A")
+    scene = plate_scene(*case, "A", duration=1.1 * t2)
+    scene.frame_interval = t2 / 37
+    sim = Simulation(scene)
+    m = sim.mass[0]
+    inertia = sim.inertia[0]
+    e0 = 0.5 * m * v0**2 + 0.5 * inertia * omega0**2
+    frames = []
+
+    class Frames:
+        def on_frames(self, b):
+            frames.append(b)
+
+    sim.run(until=t1, observers=[Frames()])
+    # at roll onset the sphere rolls: ω1 = v1 / R
+    want = e0 - (0.5 * m * v1**2 + 0.5 * inertia * (v1 / r) ** 2)
+    assert sim.dissipated_energy(t1) == pytest.approx(want, rel=ENERGY_RTOL)
+    sim.run(observers=[Frames()])
+    assert sim.dissipated_energy() == pytest.approx(e0, rel=ENERGY_RTOL)
+    diss = np.concatenate([b.dissipated for b in frames])
+    total = np.concatenate([b.kinetic_translational + b.kinetic_rotational + b.potential
+                            + b.dissipated for b in frames])
+    assert diss[0] == pytest.approx(0.0, abs=ENERGY_RTOL * e0)
+    assert diss[-1] == pytest.approx(e0, rel=ENERGY_RTOL)
+    assert np.all(np.diff(diss) >= -ENERGY_RTOL * e0)  # never gained back
+    np.testing.assert_allclose(total, total[0], rtol=ENERGY_RTOL)

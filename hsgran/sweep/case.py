@@ -25,7 +25,6 @@ from pathlib import Path
 
 import numpy as np
 
-from hsgran import _loop as ev
 from hsgran.api import TrajectoryObserver, open_writer
 from hsgran.engine import RunSummary, Simulation
 from hsgran.errors import HsgranError, InputError
@@ -155,7 +154,7 @@ def simulate(scene: Scene, trajectory: str | os.PathLike | None = None,
                                                                   (MS_REST, MS_ASLEEP))))
     return RunRecord(events=log.arrays(), counts=counts, first=first, t_end=t_end,
                      position=pos, velocity=vel, at_rest=at_rest, kinetic_energy=kinetic,
-                     dissipated_energy=float(sim.fsc[ev.F_DISSIPATED]))
+                     dissipated_energy=sim.dissipated_energy(t_end))
 
 
 def run_case(scene, overrides: dict | None = None, summaries=("collisions",), *,

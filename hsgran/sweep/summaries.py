@@ -79,7 +79,8 @@ class RunRecord:
         velocity: Velocities at the end [m/s], (N, 3).
         at_rest: Whether every sphere is at rest (on a plane or asleep) at the end.
         kinetic_energy: Translational plus rotational kinetic energy at the end [J].
-        dissipated_energy: Energy dissipated by collisions over the run [J].
+        dissipated_energy: Energy dissipated over the run [J] (initial minus final mechanical
+            energy: collisions, friction and rolling resistance on planes, landings).
     """
 
     events: dict
@@ -195,7 +196,7 @@ def kinetic_energy(rec: RunRecord) -> float:
 
 
 def dissipated_energy(rec: RunRecord) -> float:
-    """Energy dissipated by collisions over the run [J]."""
+    """Energy dissipated over the run [J] (initial minus final mechanical energy)."""
     return rec.dissipated_energy
 
 
