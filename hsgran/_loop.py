@@ -67,7 +67,7 @@ EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss", "state"
 F_T_CUR = 0  #: time of the last popped event [s]
 F_T_END = 1  #: stop before events later than this [s]
 F_FRAME_DT = 2  #: frame interval [s]
-F_DISSIPATED = 3  #: kinetic energy dissipated by collisions so far [J]
+F_DISSIPATED = 3  #: energy the collision model took so far (hops: negative) [J]
 F_LANDING_SPEED = 4  #: rebound speed below which a sphere stays on a plane [m/s]
 F_CHI = 5  #: rolling-torque convention while sliding (hsgran.onplane CONVENTION_A/_B)
 #: TC model (Luding & McNamara 1998) [s]: a collision of a sphere less than this after its
@@ -149,7 +149,7 @@ S_WIDTH = 8
 #            five are scratch space: 27 list heads, their image shifts (27, 3), the per-axis list
 #            coordinates and shifts (3, 3) of _predict, and a stack (N,) for waking sleepers
 #   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s)
-#   out    = (fr_time, fr_pos, fr_vel, fr_omg, fr_diss, log_f, log_i, fr_ms)
+#   out    = (fr_time, fr_pos, fr_vel, fr_omg, log_f, log_i, fr_ms)
 
 
 @njit(inline="always")
@@ -865,7 +865,7 @@ def _log(out, isc, t, jn, jt, en, kind, i, other, stage, regime):
     Collisions log (J_n, J_t, e_n, stage, regime); motion-state changes (``EV_STATE``,
     ``EV_LAND``) log zero impulses, e_n = NaN, the new motion state (hsgran.onplane ``MS_*``)
     as the stage and the transition that ended the last segment (``END_*``) as the regime."""
-    log_f, log_i = out[5], out[6]
+    log_f, log_i = out[4], out[5]
     m = isc[I_N_LOG]
     log_f[m, 0] = t
     log_f[m, 1] = jn
@@ -929,8 +929,7 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
     gravity, box_len, periodic = space
     ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
     ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s = sched
-    fr_time, fr_pos, fr_vel, fr_omg, fr_diss = out[0], out[1], out[2], out[3], out[4]
-    fr_ms = out[7]
+    fr_time, fr_pos, fr_vel, fr_omg, fr_ms = out[0], out[1], out[2], out[3], out[6]
     n = st.shape[0]
     t_end = fsc[F_T_END]
     executed = 0
@@ -952,7 +951,6 @@ def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, 
             # frame tick: sample every sphere's flight at t, leave the stored states alone
             f = isc[I_N_FRAMES]
             fr_time[f] = t
-            fr_diss[f] = fsc[F_DISSIPATED]
             for j in range(n):
                 x, y, z, u, v, w = _state_at(st, acc, j, t, grav_on)
                 fr_pos[f, j, 0] = x

@@ -101,6 +101,14 @@ class EventBlock:
     stage: np.ndarray  #: normal-model stage code (kinds 7, 8: the new motion state)
     regime: np.ndarray  #: tangential regime code (kinds 7, 8: what ended the last segment)
 
+    @classmethod
+    def concatenate(cls, blocks) -> EventBlock:
+        """One block holding ``blocks`` in order (empty arrays when there are none)."""
+        names = cls.__dataclass_fields__
+        if not blocks:
+            return cls(**{k: np.zeros(0) for k in names})
+        return cls(**{k: np.concatenate([getattr(b, k) for b in blocks]) for k in names})
+
 
 @dataclass
 class RunSummary:
@@ -267,7 +275,6 @@ class Simulation:
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
         nf = frame_buffer or max(1, min(FRAME_BUFFER_MAX, FRAME_BUFFER_BYTES // per_frame))
         self.fr_time = np.zeros(nf)
-        self.fr_diss = np.zeros(nf)
         self.fr_pos = np.zeros((nf, n, 3))
         self.fr_vel = np.zeros((nf, n, 3))
         self.fr_omg = np.zeros((nf, n, 3)) if self.rotation else np.zeros((1, 1, 3))
@@ -295,7 +302,7 @@ class Simulation:
              np.zeros((3, 3)), np.zeros(n if eff.gravity else 1, dtype=np.int32)),
             (self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount, self.heap,
              self.where, self.key_t, self.key_s),
-            (self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.fr_diss, self.log_f,
+            (self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.log_f,
              self.log_i, self.fr_ms),
         )
         flight, dyn, walls, space, grid, sched, _ = self._groups
@@ -335,17 +342,29 @@ class Simulation:
         pot = -np.einsum("n,fnk,k->f", self.mass, pos, self.gravity)
         return kin_t, kin_r, pot
 
-    def mechanical_energy(self, t: float | None = None) -> float:
-        """Kinetic (both kinds) plus potential energy of all spheres at ``t`` ≥ the last event
-        (default: the time of the last event) [J]."""
+    def energies_at(self, t: float | None = None):
+        """(translational, rotational or None, potential) energy of all spheres at ``t`` ≥ the
+        last event (default: the time of the last event) [J]; spins turn on planes."""
         t = self.time if t is None else t
         pos, vel = self.state_at(t)
         omg = None
         if self.rotation:
             omg = self.omg + (self.alpha * (t - self.t_loc)[:, None]
                               if self.scene.effects.gravity else 0.0)
-        return float(_mechanical(*self._energies(pos[None], vel[None],
-                                                 None if omg is None else omg[None]))[0])
+        kin_t, kin_r, pot = self._energies(pos[None], vel[None],
+                                           None if omg is None else omg[None])
+        return float(kin_t[0]), None if kin_r is None else float(kin_r[0]), float(pot[0])
+
+    def mechanical_energy(self, t: float | None = None) -> float:
+        """Kinetic (both kinds) plus potential energy of all spheres at ``t`` [J] (see
+        :meth:`energies_at`)."""
+        return float(_mechanical(*self.energies_at(t)))
+
+    @property
+    def collision_loss(self) -> float:
+        """Energy the collision model took so far [J] (part of :meth:`dissipated_energy`;
+        hops count negative)."""
+        return float(self.fsc[ev.F_DISSIPATED])
 
     def dissipated_energy(self, t: float | None = None) -> float:
         """Energy dissipated since t = 0, up to ``t`` [J]: the initial mechanical energy minus

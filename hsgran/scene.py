@@ -797,10 +797,10 @@ class _SceneBuilder:
         particle list, that crosses the line)."""
         available = available_memory()
         budget = math.inf if available is None else MEMORY_SHARE * available
-        total = n_explicit
+        total = 0
         for key, count in [("particles", n_explicit)] + [(f"{f.key}.count", f.count)
                                                           for f in fills]:
-            total += count if key != "particles" else 0
+            total += count
             need = total * BYTES_PER_PARTICLE
             if total > MAX_PARTICLES:
                 raise InputError(

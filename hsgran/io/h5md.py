@@ -833,8 +833,12 @@ def read_checkpoint(path) -> StoredCheckpoint:
             raise InputError(f"{path}: unreadable checkpoint: {_one_line(exc)}") from None
 
 
-def copy_frames(path, writer: TrajectoryWriter, frames: int, events: int,
-                block: int = 256) -> None:
+#: Bytes of frames or event-log rows :func:`copy_frames` holds at once: a block is read and
+#: appended before the next, so a resume needs this much, whatever the file's size.
+COPY_BYTES = 64 * 2**20
+
+
+def copy_frames(path, writer: TrajectoryWriter, frames: int, events: int) -> None:
     """Append the first ``frames`` frames and ``events`` event rows of ``path`` to ``writer``.
 
     Used by resume to write the file anew up to its checkpoint; blocks keep memory bounded.
@@ -852,6 +856,9 @@ def copy_frames(path, writer: TrajectoryWriter, frames: int, events: int,
             has_s = "motion_state" in particles
             if particles["position/step"].shape[0] < frames:
                 raise InputError(f"{path} has fewer frames than its checkpoint follows")
+            frame_bytes = sum(d.dtype.itemsize * int(np.prod(d.shape[1:]))
+                              for d in (particles["position/value"], particles["velocity/value"]))
+            block = max(1, COPY_BYTES // (2 * frame_bytes))  # the spins, states: at most as much
             for a in range(0, frames, block):
                 b = min(frames, a + block)
                 writer.append_frames(
@@ -864,8 +871,9 @@ def copy_frames(path, writer: TrajectoryWriter, frames: int, events: int,
                     motion_state=particles["motion_state/value"][a:b] if has_s else None)
             if events:
                 group = f[EVENTS]
-                for a in range(0, events, block * 64):
-                    b = min(events, a + block * 64)
+                rows = COPY_BYTES // sum(np.dtype(t).itemsize for t, _ in EVENT_FIELDS.values())
+                for a in range(0, events, rows):
+                    b = min(events, a + rows)
                     writer.append_events(*(group[name][a:b] for name in EVENT_FIELDS))
         except DAMAGED as exc:
             if isinstance(exc, InputError):

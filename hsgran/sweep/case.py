@@ -26,9 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from hsgran.api import TrajectoryObserver, open_writer
-from hsgran.engine import RunSummary, Simulation
+from hsgran.engine import EventBlock, RunSummary, Simulation
 from hsgran.errors import HsgranError, InputError
-from hsgran.impact import SOLID_SPHERE_INERTIA
 from hsgran.onplane import MS_ASLEEP, MS_REST
 from hsgran.scene import Scene, load_scene, parse_scene
 from hsgran.sweep import store
@@ -39,10 +38,6 @@ from hsgran.sweep.summaries import (
     RunRecord,
     evaluate,
 )
-
-#: Event-log fields kept for the summaries.
-LOG_FIELDS = ("time", "kind", "i", "j", "normal_impulse", "tangential_impulse", "e_n", "stage",
-              "regime")
 
 
 class _Log:
@@ -62,9 +57,8 @@ class _Log:
             self.trajectory.on_events(block)
 
     def arrays(self) -> dict:
-        if not self.blocks:
-            return {k: np.zeros(0) for k in LOG_FIELDS}
-        return {k: np.concatenate([getattr(b, k) for b in self.blocks]) for k in LOG_FIELDS}
+        """The event log so far, field name → array."""
+        return vars(EventBlock.concatenate(self.blocks))
 
 
 def _scene(scene, overrides, source: str) -> Scene:
@@ -131,25 +125,19 @@ def simulate(scene: Scene, trajectory: str | os.PathLike | None = None,
         first = _first_collision(sim, scene, log.arrays())
         part2 = sim.run(observers=[log]) if first is not None else RunSummary()
         counts = _add(part1.events, part2.events)
-        if writer is not None:
+        if log.trajectory is not None:
             wall = part1.wall_time + part2.wall_time
             executed = sum(counts.get(k, 0) for k in ("pair", "wall", "cell"))
-            writer.set_summary({"events": counts, "simulated_time": scene.duration,
-                                "wall_time": wall,
-                                "events_per_second": executed / wall if wall > 0 else math.inf})
+            log.trajectory.on_finish(RunSummary(
+                events=counts, simulated_time=scene.duration, wall_time=wall,
+                events_per_second=executed / wall if wall > 0 else math.inf))
     finally:
         if writer is not None:
             writer.close()
     t_end = scene.duration
     pos, vel = sim.state_at(t_end)
-    mass = sim.mass
-    kinetic = 0.5 * float(np.sum(mass * np.sum(vel * vel, axis=1)))
-    if sim.rotation:
-        omega = sim.omg.copy()
-        if scene.effects.gravity:
-            omega += sim.alpha * (t_end - sim.t_loc)[:, None]
-        inertia = SOLID_SPHERE_INERTIA * mass * sim.radius**2
-        kinetic += 0.5 * float(np.sum(inertia * np.sum(omega * omega, axis=1)))
+    kin_t, kin_r, _ = sim.energies_at(t_end)
+    kinetic = kin_t + (kin_r or 0.0)
     at_rest = bool(scene.effects.gravity) and bool(np.all(np.isin(sim.mstate,
                                                                   (MS_REST, MS_ASLEEP))))
     return RunRecord(events=log.arrays(), counts=counts, first=first, t_end=t_end,

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from hsgran import refdata
-from hsgran.engine import RunSummary, Simulation
+from hsgran.engine import EventBlock, RunSummary, Simulation
 from hsgran.errors import HsgranError, MissingDependency
 from hsgran.scene import Scene, load_scene, parse_scene
 
@@ -298,19 +298,8 @@ def quantity_extent(table: dict, quantity: str, xcol: str, ycol: str) -> tuple[f
 PAIR_EVENT, WALL_EVENT = 1, 2
 
 
-@dataclass
-class EventLog:
-    """The engine's event log of one run, concatenated (see :class:`hsgran.engine.EventBlock`)."""
-
-    time: np.ndarray
-    kind: np.ndarray
-    i: np.ndarray
-    j: np.ndarray
-    normal_impulse: np.ndarray
-    tangential_impulse: np.ndarray
-    e_n: np.ndarray
-    stage: np.ndarray
-    regime: np.ndarray
+#: The engine's event log of one run, concatenated.
+EventLog = EventBlock
 
 
 class _Collector:
@@ -323,11 +312,7 @@ class _Collector:
         self.blocks.append(block)
 
     def log(self) -> EventLog:
-        names = EventLog.__dataclass_fields__
-        if not self.blocks:
-            return EventLog(**{k: np.zeros(0) for k in names})
-        return EventLog(**{k: np.concatenate([getattr(b, k) for b in self.blocks])
-                           for k in names})
+        return EventBlock.concatenate(self.blocks)
 
 
 @dataclass
