@@ -55,8 +55,8 @@ LOG_BUFFER = 1 << 16
 #: interrupt waits for the engine to notice it (~0.5 s at the measured 4e5 events/s).
 EVENTS_PER_CALL = 200_000
 #: Version of the checkpoint layout (:meth:`Simulation.checkpoint`); a checkpoint of another
-#: version is refused rather than misread.
-CHECKPOINT_VERSION = 1
+#: version is refused rather than misread (2: the pair contacts kept for cell crossings).
+CHECKPOINT_VERSION = 2
 #: Array groups of ``hsgran._loop`` whose arrays a checkpoint holds (the frame and log buffers,
 #: the seventh group, are empty at every checkpoint).
 CHECKPOINT_GROUPS = ("flight", "dyn", "walls", "space", "grid", "sched")
@@ -223,6 +223,12 @@ class Simulation:
         self.seg_end = np.full(ng, np.inf)
         self.seg_code = np.zeros(ng, dtype=np.int8)
         self.seg_dir = np.zeros((ng, 3))
+        # without gravity: each sphere's earliest pair contact at its last prediction
+        # (hsgran._loop._predict)
+        nc = 1 if eff.gravity else n
+        self.pc_t = np.full(nc, np.inf)
+        self.pc_partner = np.full(nc, -1, dtype=np.int32)
+        self.pc_count = np.zeros(nc, dtype=np.int64)
         self.t_last = np.full(n, -np.inf)  # time of each sphere's last collision (TC model)
         self.rapid = np.zeros(n, dtype=np.int32)  # collisions in succession within tc (jams)
         self.pair_table = np.ascontiguousarray(scene.pair_table())
@@ -269,7 +275,7 @@ class Simulation:
         self.fsc[ev.F_TC_TIME] = scene.tc_time
         self.isc = np.zeros(ev.I_SIZE, dtype=np.int64)
         self.isc[ev.I_COLLAPSED] = -1
-        self.isc[ev.I_PEND_A] = self.isc[ev.I_PEND_B] = -1
+        self.isc[ev.I_PEND_A] = self.isc[ev.I_PEND_B] = self.isc[ev.I_PEND_LAYER] = -1
         self.counts = np.zeros(len(ev.EVENT_NAMES), dtype=np.int64)
         self.rec = np.zeros(REC_SIZE)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
@@ -292,7 +298,7 @@ class Simulation:
         # so the compiled code updates these arrays in place
         self._groups = (
             (self.state, self.counter, self.acc, self.mstate, self.mplane, self.seg_end,
-             self.seg_code),
+             self.seg_code, self.pc_t, self.pc_partner, self.pc_count),
             (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak, self.alpha, self.seg_dir,
              self.t_last, np.zeros(self.pair_table.shape[-1]), self.rapid),
             (self.planes_p, self.planes_n, self.planes_mat, self.planes_vel, self.planes_omg),

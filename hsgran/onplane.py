@@ -23,8 +23,9 @@ normal load per unit mass, g_t = g + g_n n its tangential part, R radius [m], k 
   torque also while sliding) and 0 under B [MODEL §5.3; which one the paper used is OURS];
 - rolling (u = 0, v̂ = v/|v|): a = [g_t − μ_r g_n v̂]/(1 + k), α = n × a / R; it needs the friction
   force |a − g_t| ≤ μ_s g_n, else the sphere slides (on an incline: tan θ ≤ (1 + k)/k μ_s);
-- rest (v = 0, ω = 0): kept while |g_t| ≤ μ_r g_n (the rolling torque holds the sphere); else it
-  starts rolling down the fall line.
+- rest (v = 0, ω = 0): kept while |g_t| ≤ μ_r g_n (the rolling torque holds the sphere) and
+  |g_t| ≤ μ_s g_n (friction holds the contact point); else it starts rolling down the fall
+  line, or sliding if friction cannot hold it (only possible with μ_r > μ_s).
 
 Exactness [OURS]: the directions (û, n_ω, v̂) are frozen within a segment. When slip, spin and
 velocity stay on one line — the paper's sphere on a plate, with any backspin or topspin, and
@@ -151,8 +152,9 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir):
     if vs > 0.0:
         dx, dy, dz = v[0] / vs, v[1] / vs, v[2] / vs
     else:
-        if gts <= mu_r * gn:
-            # at rest: the rolling torque holds the sphere against the slope (exact zero state)
+        if gts <= min(mu_r, mu_s) * gn:
+            # at rest: the rolling torque holds the sphere against the slope, and friction the
+            # contact point (exact zero state)
             v[0] = 0.0
             v[1] = 0.0
             v[2] = 0.0
@@ -208,11 +210,15 @@ def _sliding(v, w, nx, ny, nz, gn, gtx, gty, gtz, ex, ey, ez, us, radius, k, mu_
     if chi > 0.0 and mu_r > 0.0:
         if rs > ROLL_SLIP_REL * (math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2) / radius + rs):
             ox, oy, oz = rx / rs, ry / rs, rz / rs
+            mr = mu_r
         else:
             ox, oy, oz = fx, fy, fz  # no rolling spin yet: it will grow along the friction torque
-        alx -= chi * mu_r * q * ox
-        aly -= chi * mu_r * q * oy
-        alz -= chi * mu_r * q * oz
+            # a resisting couple can stop the spin from growing, not turn it backwards: at
+            # most the friction torque (matters only with μ_r > μ_s) [OURS]
+            mr = min(mu_r, mu_s)
+        alx -= chi * mr * q * ox
+        aly -= chi * mr * q * oy
+        alz -= chi * mr * q * oz
         spin_rate = alx * ox + aly * oy + alz * oz
         if rs > 0.0 and spin_rate < 0.0 and (rx * ox + ry * oy + rz * oz) > 0.0:
             t_spin = rs / -spin_rate

@@ -1,6 +1,7 @@
-"""The event loop is compiled once for every scene: effect switches are run-time values and the
-integer types at every call are fixed, so no kernel of hsgran._loop gains a second signature
-(each one would cost a cold compile of tens of seconds on a fresh machine)."""
+"""The event loop is compiled twice at most, with gravity and without: the other effect switches
+are run-time values and the integer types at every call are fixed, so no other kernel of
+hsgran._loop gains a second signature (each one would cost a cold compile of tens of seconds on a
+fresh machine)."""
 
 from __future__ import annotations
 
@@ -26,6 +27,11 @@ def test_every_scene_uses_the_same_compiled_loop():
     kernels = {name: obj for name, obj in vars(_loop).items()
                if isinstance(obj, numba.core.registry.CPUDispatcher)
                and obj.py_func.__module__ == _loop.__name__}
-    assert {"run_loop", "init", "_predict_fn", "_enter_plane"} <= set(kernels)
+    assert {"_run_loop", "run_loop_gravity", "run_loop_free", "init", "_predict_fn",
+            "_enter_plane"} <= set(kernels)
+    # the loop's gravity switch is a compile-time constant: one compile with, one without (none
+    # here when both callers came from the on-disk cache)
+    gravity_switch = {str(sig[-1]) for sig in kernels.pop("_run_loop").signatures}
+    assert gravity_switch <= {"Literal[bool](False)", "Literal[bool](True)"}
     many = {name: len(d.signatures) for name, d in kernels.items() if len(d.signatures) > 1}
     assert not many, f"kernels compiled more than once: {many}"

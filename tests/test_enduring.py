@@ -193,6 +193,22 @@ def test_slip_angle_boundary_is_tan_theta_equals_seven_halves_mu_s():
     assert Simulation(above).mstate[0] == MS_SLIDING
 
 
+def test_rolling_friction_above_sliding_friction_cannot_hold_a_sphere_friction_cannot():
+    # μ_r > μ_s (unusual): the rolling torque could hold the spin at tan θ = 0.1, but friction
+    # cannot hold the contact point, so the sphere slides down without spinning (convention A:
+    # the resisting couple cancels the friction torque)
+    mu_s, mu_r = 0.05, 0.2
+    theta = math.degrees(math.atan(0.1))
+    scene, th = incline(theta, mu_s, mu_r)
+    sim = Simulation(scene)
+    assert sim.mstate[0] == MS_SLIDING
+    sim.run(until=0.5)
+    a = 9.81 * (math.sin(th) - mu_s * math.cos(th))
+    got = distance_along_fall_line(sim, scene, th, 0.5)
+    np.testing.assert_allclose(got, 0.5 * a * 0.5**2, rtol=CLOSED_FORM_RTOL)
+    assert np.all(sim.alpha[0] == 0.0)  # the spin stays zero
+
+
 def test_rolling_friction_holds_a_sphere_on_a_gentle_slope():
     mu_r = 0.05  # holds while tan θ ≤ μ_r (θ ≤ 2.86°)
     held, _ = incline(2.5, 0.3, mu_r)
