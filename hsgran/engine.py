@@ -270,7 +270,7 @@ class Simulation:
         self.heap, self.where, self.key_t, self.key_s = new_heap(n + 1)
         self.fsc = np.zeros(ev.F_SIZE)
         self.fsc[ev.F_FRAME_DT] = scene.frame_interval
-        self.fsc[ev.F_LANDING_SPEED] = scene.landing_speed
+        self.fsc[ev.F_LANDING_SPEED] = scene.effective_landing_speed
         self.fsc[ev.F_CHI] = (CONVENTION_A if scene.rolling_convention == "A" else CONVENTION_B)
         self.fsc[ev.F_TC_TIME] = scene.tc_time
         self.isc = np.zeros(ev.I_SIZE, dtype=np.int64)

@@ -26,12 +26,13 @@ Prints figures only (no pass/fail), with the targets next to them:
   untouched parts of the frame buffer are never resident); it is meaningful from N ~ 10⁵.
 - **Granular scene**: steel spheres (radius 1–1.5 mm) falling in a closed glass box with
   gravity, rotation, friction and plasticity, like ``scenarios/falling_box.toml``, run only to
-  0.11 s: the first spheres reach the floor at ≈ 0.1 s, and the engine has no enduring-contact
-  handling yet to let a pile form. Independent fills (seeds 1, 2, ...) are run until the timed
-  total reaches ``--seconds``.
+  0.11 s: the first spheres reach the floor at ≈ 0.1 s, so this is the cost of free fall with
+  the first impacts (the pile that forms next is the following item). Independent fills
+  (seeds 1, 2, ...) are run until the timed total reaches ``--seconds``.
 - **Settling pile**: ``tools/scenes/pour.toml`` (2000 steel spheres poured into a glass box at
   e = 0.5, with the enduring-contact rules of docs/enduring-contact.md) run to ``--pile-until``
-  (default 0.2 s; the collapse guard stops it at ≈ 0.21 s, see that page): events per particle
+  (default 0.2 s, while the pile forms and events are densest; ``--pile-until 0.7`` runs it
+  until every sphere is at rest, about 2.5 min, see that page): events per particle
   per simulated second (collisions, landings and motion-state changes) in the last 0.05 s and
   over the whole run, spheres at rest, wall time, engine bytes per particle and peak RSS.
 
