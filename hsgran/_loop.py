@@ -409,11 +409,10 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
                     ppartner = j
                     kept = False
             j = nxt[j]
-    if not grav_on:
-        if not kept:
-            pc_t[i] = t_now + pbest
-            pc_partner[i] = ppartner
-            pc_count[i] = counter[ppartner] if ppartner >= 0 else 0
+    if not grav_on and not kept:
+        pc_t[i] = t_now + pbest
+        pc_partner[i] = ppartner
+        pc_count[i] = counter[ppartner] if ppartner >= 0 else 0
     if pbest < best:
         best = pbest
         kind = EV_PAIR
@@ -1324,9 +1323,8 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
             cell[i, k] = c
             remove(i, old, head, nxt, prv)
             insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
-            _repredict_later(isc, i)
-            if isc[I_PEND_A] == i:
-                isc[I_PEND_LAYER] = code  # look at the new layer of neighbours only
+            _repredict_later(isc, i)  # into I_PEND_A: the top of the loop emptied both slots
+            isc[I_PEND_LAYER] = code  # look at the new layer of neighbours only
             counts[EV_CELL] += 1
             continue
 

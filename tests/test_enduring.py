@@ -172,16 +172,22 @@ def test_incline_rolls_at_five_sevenths_g_sin_theta_below_the_slip_angle(theta):
     np.testing.assert_allclose(np.linalg.norm(vel[0]), a * 0.5, rtol=CLOSED_FORM_RTOL)
 
 
-@pytest.mark.parametrize("theta", [50.0, 70.0])
-def test_incline_slides_above_the_slip_angle(theta):
-    mu_s = 0.3
-    scene, th = incline(theta, mu_s, 0.0)
+def slides_down(theta, mu_s, mu_r):
+    """Start a sphere at rest on the incline, check that it slides and has covered
+    ½ g (sin θ − μ_s cos θ) t² along the fall line at t = 0.5 s; returns the simulation."""
+    scene, th = incline(theta, mu_s, mu_r)
     sim = Simulation(scene)
     assert sim.mstate[0] == MS_SLIDING
     sim.run(until=0.5)
     a = 9.81 * (math.sin(th) - mu_s * math.cos(th))
     got = distance_along_fall_line(sim, scene, th, 0.5)
     np.testing.assert_allclose(got, 0.5 * a * 0.5**2, rtol=CLOSED_FORM_RTOL)
+    return sim
+
+
+@pytest.mark.parametrize("theta", [50.0, 70.0])
+def test_incline_slides_above_the_slip_angle(theta):
+    slides_down(theta, 0.3, 0.0)
 
 
 def test_slip_angle_boundary_is_tan_theta_equals_seven_halves_mu_s():
@@ -193,19 +199,11 @@ def test_slip_angle_boundary_is_tan_theta_equals_seven_halves_mu_s():
     assert Simulation(above).mstate[0] == MS_SLIDING
 
 
-def test_rolling_friction_above_sliding_friction_cannot_hold_a_sphere_friction_cannot():
+def test_a_slope_that_rolling_friction_holds_but_sliding_friction_does_not_is_slid_down():
     # μ_r > μ_s (unusual): the rolling torque could hold the spin at tan θ = 0.1, but friction
     # cannot hold the contact point, so the sphere slides down without spinning (convention A:
     # the resisting couple cancels the friction torque)
-    mu_s, mu_r = 0.05, 0.2
-    theta = math.degrees(math.atan(0.1))
-    scene, th = incline(theta, mu_s, mu_r)
-    sim = Simulation(scene)
-    assert sim.mstate[0] == MS_SLIDING
-    sim.run(until=0.5)
-    a = 9.81 * (math.sin(th) - mu_s * math.cos(th))
-    got = distance_along_fall_line(sim, scene, th, 0.5)
-    np.testing.assert_allclose(got, 0.5 * a * 0.5**2, rtol=CLOSED_FORM_RTOL)
+    sim = slides_down(math.degrees(math.atan(0.1)), mu_s=0.05, mu_r=0.2)
     assert np.all(sim.alpha[0] == 0.0)  # the spin stays zero
 
 

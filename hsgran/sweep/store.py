@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import csv
+import io
 import json
 import math
 import os
@@ -162,18 +163,12 @@ def write_table(results: str | os.PathLike, rows: list[dict], parameters, summar
                   **row.get("summaries", {}), "wall_time": row.get("wall_time"),
                   "error": row.get("error", "")}
         lines.append([cell(values.get(c)) for c in columns])
+    text = io.StringIO(newline="")
+    writer = csv.writer(text)
+    writer.writerow(columns)
+    writer.writerows(lines)
     path = Path(results) / TABLE
-    handle, name = tempfile.mkstemp(prefix=f".{TABLE}.", suffix=".part", dir=results)
-    try:
-        with os.fdopen(handle, "w", newline="", encoding="utf-8") as f:
-            writer = csv.writer(f)
-            writer.writerow(columns)
-            writer.writerows(lines)
-        os.replace(name, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(name)
-        raise
+    atomic_write(path, text.getvalue())
     return path
 
 
