@@ -60,8 +60,9 @@ EV_STATE = 7  #: a sphere's on-plane motion segment ends (slide → roll, roll �
 EV_LAND = 8  #: (counter only) a sphere reached a plane too slowly to bounce and stays on it
 EV_TC = 9  #: (counter only) collisions made elastic by the TC model (see F_TC_TIME)
 EV_HOP = 10  #: (counter only) pair collisions executed as a hop (see _hop)
+EV_WEDGE = 11  #: (counter only) spheres stopped in a zero-time wedge sequence (see _wedge_stop)
 EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss", "state", "land", "tc",
-               "hop")
+               "hop", "wedge")
 
 # float scalars
 F_T_CUR = 0  #: time of the last popped event [s]
@@ -123,9 +124,16 @@ MAX_ZERO_TIME_EVENTS = 1000
 #: bodies at once (see _falls_asleep). Far above the handful of collisions of a legitimate
 #: simultaneous hit, far below the collapse guard.
 JAM_EVENTS = 64
+#: Events of one sphere in succession without its clock advancing after which a collision with
+#: an immovable body (a plane at rest, or a sphere the collision leaves at rest) stops it: see
+#: _wedge_stop. Above JAM_EVENTS, so that a jammed sphere that can fall asleep on an upward
+#: contact does so first; far below the collapse guard (MAX_ZERO_TIME_EVENTS).
+WEDGE_EVENTS = 128
 #: A jammed sphere may fall asleep on a resting sphere it meets if the contact normal points
-#: upwards at all (cos > 1e-3 to the vertical: gravity presses it onto that sphere) [-].
-JAM_SUPPORT_COS = 1e-3
+#: upwards at all, so that gravity presses it onto that sphere: cos ≥ 1e-6 to the vertical,
+#: far above the rounding of the direction [-]. (1e-3 left a sphere 0.05° above the equator of
+#: a sleeper, wedged between it and a side wall, hopping off it into the wall for ever.)
+JAM_SUPPORT_COS = 1e-6
 #: A sphere whose gap to a plane is within this fraction of its radius at t = 0 starts on the
 #: plane: the scene check accepts touching spheres written in decimal to 1e-12 (hsgran.scene
 #: CONTACT_TOLERANCE), so the same bound.
@@ -599,6 +607,36 @@ def _note_rapid(p, t, t_last, rapid, tc):
         rapid[p] = 0
 
 
+@njit
+def _wedge_stop(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                rotation):
+    """Stop sphere p if it moves (in flight, or sliding or rolling on a plane) and has just
+    collided with an immovable body after at least WEDGE_EVENTS events in succession at one
+    instant, or with another sphere in such a sequence; returns whether it was stopped.
+
+    Such a sequence is a sphere wedged between immovable bodies: between a side wall and a
+    sleeper leaning over it, on the floor in a pocket of a wall and resting spheres, or in a
+    chain of spheres between a wall and a sleeper (seen in a 400-sphere pour at e = 0.8). The
+    TC model makes its collisions elastic, so the bodies send it back and forth at the same
+    instant without end: with sticking friction the impulses shrink geometrically (by ~0.9 a
+    collision, seen in 200-sphere pours), without friction they need not shrink at all. A
+    sphere held by bodies at rest comes to rest relative to them (e = 0, the limit of an
+    enduring contact), so it is stopped at once [OURS]: in flight, velocity and spin zero,
+    and gravity then decides what comes next (it falls out of a wedge that opens downwards,
+    or, pressed into an upward contact, falls asleep there, _falls_asleep); on a plane, at
+    rest there (_stop_on_plane). What is given up is the kinetic energy it had left, which
+    ``dissipated_energy`` counts and the run summary's "wedge" count says how often."""
+    mstate = flight[3]
+    if dyn[4][p] < WEDGE_EVENTS or mstate[p] == MS_REST:
+        return False
+    if mstate[p] == MS_FLIGHT:
+        _halt(p, flight[0], dyn[0], rotation)
+    else:
+        _stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                       rotation)
+    return True
+
+
 @njit(inline="always")
 def _both_slow_on_supports(i, j, st, mstate, v_land):
     """Whether spheres i and j are both on a support (a plane, or asleep on a sphere) and both
@@ -809,6 +847,15 @@ def _tc_row(row, t, t1, t2, fsc, row_tc):
         row_tc[P_E_FIXED] = TC_RESTITUTION
         return row_tc, True
     return row, False
+
+
+@njit(inline="always")
+def _plane_at_rest(w, walls):
+    """Whether plane w neither moves nor turns."""
+    planes_vel, planes_omg = walls[3], walls[4]
+    return (planes_vel[w, 0] == 0.0 and planes_vel[w, 1] == 0.0 and planes_vel[w, 2] == 0.0
+            and planes_omg[w, 0] == 0.0 and planes_omg[w, 1] == 0.0
+            and planes_omg[w, 2] == 0.0)
 
 
 @njit(inline="always")
@@ -1209,6 +1256,19 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
                 if rest_j and mstate[j] != MS_REST:
                     _wake_sleepers(j, t, flight, dyn, walls, space, grid, sched, isc,
                                    flags[FL_GRAVITY], rotation)
+                # a zero-time sequence against a sphere the collision left at rest, or of
+                # two spheres that are both in one (a chain of moving spheres between
+                # immovable ends: each is stopped, see _wedge_stop); not after a hop, whose
+                # separation is what ends its zero-time meetings
+                i_rests = mstate[i] == MS_REST  # before i is stopped
+                if not hopped and (mstate[j] == MS_REST or zstreak[j] >= WEDGE_EVENTS) and (
+                        _wedge_stop(i, t, flight, dyn, walls, gravity, pair_table, fsc,
+                                    friction, rolling, rotation)):
+                    counts[EV_WEDGE] += 1
+                if not hopped and (i_rests or zstreak[i] >= WEDGE_EVENTS) and _wedge_stop(
+                        j, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                        rotation):
+                    counts[EV_WEDGE] += 1
             counter[i] += 1
             counter[j] += 1
             _note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
@@ -1283,6 +1343,10 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
                                  fsc, friction, rolling, rotation)
                     counts[EV_LAND] += 1
                     landed = True
+            if (grav_on and not landed and _plane_at_rest(w, walls)
+                    and _wedge_stop(i, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                                    rolling, rotation)):
+                counts[EV_WEDGE] += 1  # a zero-time sequence against this plane
             counter[i] += 1
             _note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
             t_last[i] = t

@@ -487,6 +487,11 @@ checkpoints: a run with -o stores a restart state in its file every --checkpoint
   the current batch of events). 'hsgran run --resume OUT.h5' continues from the last one
   and gives, bit for bit, the frames an uninterrupted run gives; with --until it also
   extends a finished run. A hard kill loses at most the work since the last checkpoint.
+enduring contact: with gravity, rules of hsgran's own ([OURS], not from the paper) end the
+  infinite collision sequences of inelastic collapse: landing on a plane below
+  landing_speed, the TC model, sleeping and held resting spheres, hops, and stopping a
+  sphere wedged between immovable bodies. The summary counts them (land, tc, hop, wedge);
+  their parameters and costs in accuracy: docs/enduring-contact.md.
 """
 
 

@@ -55,8 +55,9 @@ LOG_BUFFER = 1 << 16
 #: interrupt waits for the engine to notice it (~0.5 s at the measured 4e5 events/s).
 EVENTS_PER_CALL = 200_000
 #: Version of the checkpoint layout (:meth:`Simulation.checkpoint`); a checkpoint of another
-#: version is refused rather than misread (2: the pair contacts kept for cell crossings).
-CHECKPOINT_VERSION = 2
+#: version is refused rather than misread (2: the pair contacts kept for cell crossings; 3: the
+#: "wedge" event count).
+CHECKPOINT_VERSION = 3
 #: Array groups of ``hsgran._loop`` whose arrays a checkpoint holds (the frame and log buffers,
 #: the seventh group, are empty at every checkpoint).
 CHECKPOINT_GROUPS = ("flight", "dyn", "walls", "space", "grid", "sched")

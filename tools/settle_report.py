@@ -1,5 +1,5 @@
 """How far a settling scene gets: events per particle and second, spheres at rest, and where the
-collapse guard stops it (docs/enduring-contact.md, "What does not work yet").
+collapse guard stops it (docs/enduring-contact.md, "Settling scenes: where it stands").
 
 Usage:
     NUMBA_CACHE_DIR=... .venv/bin/python tools/settle_report.py [SCENE ...]
