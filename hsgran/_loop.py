@@ -60,7 +60,7 @@ EV_STATE = 7  #: a sphere's on-plane motion segment ends (slide → roll, roll �
 EV_LAND = 8  #: (counter only) a sphere reached a plane too slowly to bounce and stays on it
 EV_TC = 9  #: (counter only) collisions made elastic by the TC model (see F_TC_TIME)
 EV_HOP = 10  #: (counter only) pair collisions executed as a hop (see _hop)
-EV_WEDGE = 11  #: (counter only) spheres stopped in a zero-time wedge sequence (see _wedge_stop)
+EV_WEDGE = 11  #: a sphere stopped in a zero-time wedge sequence (see _wedge_stop)
 EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss", "state", "land", "tc",
                "hop", "wedge")
 
@@ -105,15 +105,28 @@ FL_GRAVITY = 5  #: parabolic flight, on-plane motion states
 FL_LOG = 6  #: record every event in the log buffer
 FL_SIZE = 7
 
+#: Event-log entries one event can write: a collision, and a landing or the wedge stops of
+#: both spheres. The log buffer is flushed while it still has room for that many, so no entry
+#: of an event is ever dropped (the buffer must hold at least this many).
+LOG_ENTRIES_PER_EVENT = 3
+
 STATUS_DONE = 0  #: reached t_end
 STATUS_FRAMES_FULL = 1  #: the frame buffer is full: flush and call again
 STATUS_LOG_FULL = 2  #: the event-log buffer is full: flush and call again
 STATUS_BUDGET = 3  #: executed the requested number of events (progress report)
 STATUS_COLLAPSE = 4  #: a sphere had too many events without time advancing
 
-#: A sphere whose event happens less than ZERO_TIME_REL × max(1 s, t) after its previous one
-#: made no progress in time: that is double round-off of the clock.
+#: Two instants closer than ZERO_TIME_REL × max(1 s, t) are the same up to double round-off of
+#: the clock (a frame due at t_end may round that far above it).
 ZERO_TIME_REL = 4e-16
+#: A sphere whose event happens less than NO_PROGRESS_REL × max(1 s, t) after its previous one
+#: made no progress in time (collapse guard, jams, wedges). In a cage of touching bodies the
+#: time between collisions is the round-off of the predictions, a few ulps of the clock and
+#: not always zero: a sphere sliding at 1 mm/s in a pocket of three resting spheres met them
+#: 4.4e-16 s apart at t = 0.28 s (8 ulps), and with a bound of 4e-16 its run went on without
+#: end. 1e-13 is ~450 ulps at t = 1 s and 1e7 times shorter than the contact duration of
+#: millimetre spheres (1e4 times for micron spheres): no two real collisions are that close.
+NO_PROGRESS_REL = 1e-13
 #: The retry limit of pop–re-check–execute: consecutive events of one sphere that do not advance
 #: its clock (re-check failures, collisions) after which the run stops with an error instead of
 #: looping forever (inelastic collapse or a rounding loop). Legitimate simultaneous events (a
@@ -124,10 +137,11 @@ MAX_ZERO_TIME_EVENTS = 1000
 #: bodies at once (see _falls_asleep). Far above the handful of collisions of a legitimate
 #: simultaneous hit, far below the collapse guard.
 JAM_EVENTS = 64
-#: Events of one sphere in succession without its clock advancing after which a collision with
-#: an immovable body (a plane at rest, or a sphere the collision leaves at rest) stops it: see
-#: _wedge_stop. Above JAM_EVENTS, so that a jammed sphere that can fall asleep on an upward
-#: contact does so first; far below the collapse guard (MAX_ZERO_TIME_EVENTS).
+#: Events of one sphere in succession without its clock advancing (NO_PROGRESS_REL) after which
+#: a collision with an immovable body (a plane at rest, or a sphere the collision leaves at
+#: rest) stops it: see _wedge_stop. Above JAM_EVENTS, so that a jammed sphere that can fall
+#: asleep on an upward contact does so first; far below the collapse guard
+#: (MAX_ZERO_TIME_EVENTS).
 WEDGE_EVENTS = 128
 #: A jammed sphere may fall asleep on a resting sphere it meets if the contact normal points
 #: upwards at all, so that gravity presses it onto that sphere: cos ≥ 1e-6 to the vertical,
@@ -221,7 +235,7 @@ def _min_image(d, k, box_len, periodic):
 @njit(inline="always")
 def _note_progress(p, t, st, zstreak):
     """Count consecutive events of sphere p that do not advance its clock (collapse guard)."""
-    if t - st[p, S_T] <= ZERO_TIME_REL * max(1.0, t):
+    if t - st[p, S_T] <= NO_PROGRESS_REL * max(1.0, t):
         zstreak[p] += 1
     else:
         zstreak[p] = 0
@@ -610,27 +624,35 @@ def _note_rapid(p, t, t_last, rapid, tc):
 @njit
 def _wedge_stop(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
                 rotation):
-    """Stop sphere p if it moves (in flight, or sliding or rolling on a plane) and has just
-    collided with an immovable body after at least WEDGE_EVENTS events in succession at one
-    instant, or with another sphere in such a sequence; returns whether it was stopped.
+    """Stop sphere p, which has just collided with an immovable body after at least
+    WEDGE_EVENTS events in succession at one instant (NO_PROGRESS_REL), if it moves (in
+    flight, or sliding or rolling on a plane); returns whether it was stopped. Immovable: a
+    plane at rest, a sphere the collision leaves at rest, or a sphere stopped here at this
+    instant (it met the collision at standstill); the caller decides.
 
     Such a sequence is a sphere wedged between immovable bodies: between a side wall and a
     sleeper leaning over it, on the floor in a pocket of a wall and resting spheres, or in a
-    chain of spheres between a wall and a sleeper (seen in a 400-sphere pour at e = 0.8). The
-    TC model makes its collisions elastic, so the bodies send it back and forth at the same
-    instant without end: with sticking friction the impulses shrink geometrically (by ~0.9 a
-    collision, seen in 200-sphere pours), without friction they need not shrink at all. A
-    sphere held by bodies at rest comes to rest relative to them (e = 0, the limit of an
-    enduring contact), so it is stopped at once [OURS]: in flight, velocity and spin zero,
+    chain of spheres between a wall and a sleeper (seen in a 400-sphere pour at e = 0.8: the
+    spheres at its ends stop against the wall and the sleeper, the ones between against
+    them). The TC model makes its collisions elastic, so the bodies send it back and forth at
+    the same instant without end: with sticking friction the impulses shrink geometrically
+    (by ~0.9 a collision, seen in 200-sphere pours), without friction they need not shrink at
+    all. A sphere held by bodies at rest comes to rest relative to them (e = 0, the limit of
+    an enduring contact), so it is stopped at once [OURS]: in flight, velocity and spin zero,
     and gravity then decides what comes next (it falls out of a wedge that opens downwards,
     or, pressed into an upward contact, falls asleep there, _falls_asleep); on a plane, at
-    rest there (_stop_on_plane). What is given up is the kinetic energy it had left, which
-    ``dissipated_energy`` counts and the run summary's "wedge" count says how often."""
-    mstate = flight[3]
-    if dyn[4][p] < WEDGE_EVENTS or mstate[p] == MS_REST:
-        return False
+    rest there (_stop_on_plane; on a slope too steep for rest it slides on from standstill).
+    What is given up is the kinetic energy it had left, which ``dissipated_energy`` counts;
+    the run summary's "wedge" count says how often, and the event log has an entry for each
+    stop (EV_WEDGE). A zero-time loop that meets no immovable body is left to the collapse
+    guard."""
+    st, omg, mstate = flight[0], dyn[0], flight[3]
+    if dyn[4][p] < WEDGE_EVENTS or mstate[p] == MS_REST or (
+            st[p, 3] == 0.0 and st[p, 4] == 0.0 and st[p, 5] == 0.0
+            and (not rotation or (omg[p, 0] == 0.0 and omg[p, 1] == 0.0 and omg[p, 2] == 0.0))):
+        return False  # nothing to stop
     if mstate[p] == MS_FLIGHT:
-        _halt(p, flight[0], dyn[0], rotation)
+        _halt(p, st, omg, rotation)
     else:
         _stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
                        rotation)
@@ -963,11 +985,13 @@ def _settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity, pair_table, fsc, f
 
 @njit(inline="always")
 def _log(out, isc, t, jn, jt, en, kind, i, other, stage, regime):
-    """Append one entry to the event log; True when the buffer is then full.
+    """Append one entry to the event log; True when the buffer can no longer take all the
+    entries of one event (LOG_ENTRIES_PER_EVENT): flush it before the next event.
 
     Collisions log (J_n, J_t, e_n, stage, regime); motion-state changes (``EV_STATE``,
-    ``EV_LAND``) log zero impulses, e_n = NaN, the new motion state (hsgran.onplane ``MS_*``)
-    as the stage and the transition that ended the last segment (``END_*``) as the regime."""
+    ``EV_LAND``, ``EV_WEDGE``) log zero impulses, e_n = NaN, the new motion state
+    (hsgran.onplane ``MS_*``) as the stage and the transition that ended the last segment
+    (``END_*``) as the regime."""
     log_f, log_i = out[4], out[5]
     m = isc[I_N_LOG]
     log_f[m, 0] = t
@@ -980,7 +1004,7 @@ def _log(out, isc, t, jn, jt, en, kind, i, other, stage, regime):
     log_i[m, 3] = stage
     log_i[m, 4] = regime
     isc[I_N_LOG] = m + 1
-    return m + 1 == log_f.shape[0]
+    return log_f.shape[0] - (m + 1) < LOG_ENTRIES_PER_EVENT
 
 
 @njit
@@ -1089,6 +1113,7 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
         i = e
         kind = ev_kind[i]
         landed = False
+        wedged_a = wedged_b = -1  # spheres this collision stops in a wedge (_wedge_stop)
         tc_on = False
         if kind == EV_PAIR:
             j = np.int64(ev_partner[i])  # one integer type for sphere indices: one compile
@@ -1256,19 +1281,22 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
                 if rest_j and mstate[j] != MS_REST:
                     _wake_sleepers(j, t, flight, dyn, walls, space, grid, sched, isc,
                                    flags[FL_GRAVITY], rotation)
-                # a zero-time sequence against a sphere the collision left at rest, or of
-                # two spheres that are both in one (a chain of moving spheres between
-                # immovable ends: each is stopped, see _wedge_stop); not after a hop, whose
+                # a zero-time sequence against a sphere the collision left at rest, or
+                # against one stopped in such a sequence at this instant (met at standstill:
+                # a chain between immovable ends, see _wedge_stop); not after a hop, whose
                 # separation is what ends its zero-time meetings
-                i_rests = mstate[i] == MS_REST  # before i is stopped
-                if not hopped and (mstate[j] == MS_REST or zstreak[j] >= WEDGE_EVENTS) and (
-                        _wedge_stop(i, t, flight, dyn, walls, gravity, pair_table, fsc,
-                                    friction, rolling, rotation)):
-                    counts[EV_WEDGE] += 1
-                if not hopped and (i_rests or zstreak[i] >= WEDGE_EVENTS) and _wedge_stop(
-                        j, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
-                        rotation):
-                    counts[EV_WEDGE] += 1
+                i_holds = mstate[i] == MS_REST or (
+                    zstreak[i] >= WEDGE_EVENTS and vi0x == 0.0 and vi0y == 0.0 and vi0z == 0.0)
+                j_holds = mstate[j] == MS_REST or (
+                    zstreak[j] >= WEDGE_EVENTS and vj0x == 0.0 and vj0y == 0.0 and vj0z == 0.0)
+                if not hopped and j_holds and _wedge_stop(i, t, flight, dyn, walls, gravity,
+                                                          pair_table, fsc, friction, rolling,
+                                                          rotation):
+                    wedged_a = i
+                if not hopped and i_holds and _wedge_stop(j, t, flight, dyn, walls, gravity,
+                                                          pair_table, fsc, friction, rolling,
+                                                          rotation):
+                    wedged_b = j
             counter[i] += 1
             counter[j] += 1
             _note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
@@ -1346,7 +1374,7 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
             if (grav_on and not landed and _plane_at_rest(w, walls)
                     and _wedge_stop(i, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
                                     rolling, rotation)):
-                counts[EV_WEDGE] += 1  # a zero-time sequence against this plane
+                wedged_a = i  # a zero-time sequence against this plane
             counter[i] += 1
             _note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
             t_last[i] = t
@@ -1403,13 +1431,21 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
                 other >= 0 and zstreak[other] > MAX_ZERO_TIME_EVENTS):
             isc[I_COLLAPSED] = i
             return STATUS_COLLAPSE
+        for p in (wedged_a, wedged_b):
+            if p >= 0:
+                counts[EV_WEDGE] += 1
         if log_on:
+            # every entry of the event is written (_log keeps room for them)
             full = _log(out, isc, t, rec[REC_J_N], rec[REC_J_T], rec[REC_E_N], kind, i,
                         other, int(rec[REC_STAGE]), int(rec[REC_REGIME]))
             if landed:
                 # the rebound was too slow: the sphere stays on the plane from now on
-                full = full or _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, other,
-                                    mstate[i], END_NONE)
+                full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, other, mstate[i],
+                            END_NONE) or full
+            for p in (wedged_a, wedged_b):
+                if p >= 0:
+                    full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_WEDGE, p,
+                                other if p == i else i, mstate[p], END_NONE) or full
             if full:
                 return STATUS_LOG_FULL
         if executed >= max_events:

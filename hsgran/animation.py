@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hsgran._loop import EV_LAND, EV_PAIR, EV_STATE, EV_WALL
+from hsgran._loop import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
 from hsgran.contact.tangential import REGIME_NONE, REGIME_ROLLING, REGIME_SLIDING
 from hsgran.errors import InputError
 from hsgran.onplane import MS_ASLEEP, MS_FLIGHT, MS_REST, MS_ROLLING, MS_SLIDING
@@ -421,7 +421,7 @@ def motion_states(traj) -> np.ndarray:
         while e < n_events and ev["time"][order[e]] <= t:
             i = order[e]
             kind = int(ev["kind"][i])
-            if kind in (EV_STATE, EV_LAND):
+            if kind in (EV_STATE, EV_LAND, EV_WEDGE):
                 state[ev["i"][i]] = int(ev["stage"][i])
             elif kind in (EV_PAIR, EV_WALL):
                 state[ev["i"][i]] = MS_FLIGHT

@@ -93,14 +93,14 @@ class EventBlock:
     """Executed collisions (the event log)."""
 
     time: np.ndarray  #: [s]
-    kind: np.ndarray  #: 1 pair, 2 wall, 7 motion-state change, 8 landing on a plane
+    kind: np.ndarray  #: 1 pair, 2 wall, 7 motion-state change, 8 landing, 11 wedge stop
     i: np.ndarray  #: sphere index
     j: np.ndarray  #: partner sphere, or −1 − w for plane w
     normal_impulse: np.ndarray  #: J_n [N s]
     tangential_impulse: np.ndarray  #: J_t [N s]
     e_n: np.ndarray  #: normal restitution [-]
-    stage: np.ndarray  #: normal-model stage code (kinds 7, 8: the new motion state)
-    regime: np.ndarray  #: tangential regime code (kinds 7, 8: what ended the last segment)
+    stage: np.ndarray  #: normal-model stage code (kinds 7, 8, 11: the new motion state)
+    regime: np.ndarray  #: tangential regime (kinds 7, 8, 11: what ended the last segment)
 
     @classmethod
     def concatenate(cls, blocks) -> EventBlock:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from hsgran._loop import EV_LAND, EV_PAIR, EV_STATE, EV_WALL
+from hsgran._loop import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
 from hsgran.errors import InputError, MissingDependency
 from hsgran.io.h5md import read_trajectory
 
@@ -39,7 +39,8 @@ FORMATS = {".png": "png", ".pdf": "pdf", ".svg": "svg"}
 EVENT_MARKERS = ((EV_PAIR, "sphere-sphere collision", "o"),
                  (EV_WALL, "wall collision", "v"),
                  (EV_STATE, "motion-state change", "d"),
-                 (EV_LAND, "landing", "s"))
+                 (EV_LAND, "landing", "s"),
+                 (EV_WEDGE, "stopped in a wedge", "x"))
 
 #: Figure of a sweep's results folder when no output is given.
 SWEEP_FIGURE = "summary.png"

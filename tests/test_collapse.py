@@ -151,6 +151,7 @@ def test_sphere_wedged_between_a_wall_and_a_sphere_comes_to_rest(effects):
     frames = []
     summary = sim.run(observers=[SimpleNamespace(on_frames=frames.append)])
     assert summary.collisions <= WEDGE_MAX_COLLISIONS
+    assert summary.events["wedge"] == 0  # a jammed sphere that can fall asleep does so first
     assert list(sim.mstate) == [MS_REST, MS_REST]
     assert sim.mplane[1] == -2  # asleep on sphere 0
     assert frames[-1].motion_state[-1].tolist() == [MS_REST, MS_ASLEEP]  # as the file says

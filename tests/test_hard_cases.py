@@ -6,12 +6,15 @@ Every scene here is built from text with the shared builders of ``tests/scenes.p
 that must be exact are binary fractions (radius 2⁻⁷ m, positions in multiples of it).
 """
 
+from types import SimpleNamespace
+
 import numba
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from hsgran.engine import Simulation
+from hsgran._loop import EV_WEDGE
+from hsgran.engine import EventBlock, Simulation
 from hsgran.onplane import MS_REST
 from hsgran.scene import load_scene, parse_scene
 from tests.scenes import FLOOR, num, plane, sphere
@@ -318,31 +321,17 @@ def test_pour_of_2000_spheres_settles_to_rest_without_overlap():
 
 # -- small pours: a sphere wedged between a side wall and a sleeper above it -----------------
 
-#: tools/scenes/pour.toml with 200 spheres in a 15 mm wide box.
-SMALL_POUR = header("small pour", '["gravity", "rotation", "friction"]', e=0.5,
-                    extra="[[contacts]]\nbetween = [\"steel\", \"glass\"]\n"
-                          f"sliding_friction = {MU}\nrestitution = 0.5\n") + """
-[[walls]]
-kind = "box"
-lower = [0.0, 0.0, 0.0]
-upper = [0.015, 0.015, 0.12]
-material = "glass"
-[[fill]]
-count = 200
-material = "steel"
-radius = [0.0010, 0.0012]
-region = { lower = [0.0, 0.0, 0.03], upper = [0.015, 0.015, 0.12] }
-speed = 0.05
-"""
-#: Seeds of SMALL_POUR that reached the collapse guard (at 0.205 s and 0.172 s) before a
-#: sphere in a zero-time sequence against immovable bodies was stopped (_loop._wedge_stop):
-#: in both, a sphere in flight between a side wall and a sleeper leaning over it, the two
-#: sending it back and forth with impulses shrinking by ~0.9 a collision at one instant.
+#: Seeds of tools/scenes/small_pour.toml that reached the collapse guard (at 0.205 s and
+#: 0.172 s) before a sphere in a zero-time sequence against immovable bodies was stopped
+#: (_loop._wedge_stop): in both, a sphere in flight between a side wall and a sleeper leaning
+#: over it, the two sending it back and forth with impulses shrinking by ~0.9 a collision at
+#: one instant.
 WEDGED_SEEDS = (1, 3)
 
 
 def small_pour(seed):
-    return parse_scene(SMALL_POUR.replace("[scene]\n", f"[scene]\nseed = {seed}\n", 1))
+    """tools/scenes/small_pour.toml (200 spheres, e = 0.5, to 1 s) with this seed."""
+    return load_scene("tools/scenes/small_pour.toml", overrides={"scene.seed": seed})
 
 
 @pytest.mark.skipif(numba.config.DISABLE_JIT, reason="a pour takes ~10 s compiled, hours "
@@ -353,6 +342,54 @@ def test_small_pour_with_a_sphere_wedged_under_a_sleeper_settles(seed):
     sim = Simulation(scene)
     summary = sim.run()
     assert summary.events["wedge"] >= 1
+    assert_at_rest_in_the_box_without_overlap(scene, sim)
+
+
+#: Variants of tools/scenes/small_pour.toml (tools/settle_variants.py) that reached the
+#: collapse guard until the wedge rule stopped spheres on planes and in chains: 100 frictionless
+#: spheres at e = 0.3 in a 20 mm box, where a sphere sliding on the floor was caught in a pocket
+#: of a wall and two resting spheres with a constant impulse; and 400 spheres at e = 0.8 with
+#: rolling resistance in a 12 mm box, where a chain of three spheres in flight lay between a
+#: wall and a sleeper.
+POCKET = {"scene.seed": 2, "scene.effects": ["gravity"], "fill[0].count": 100,
+          "walls[0].upper": [0.02, 0.02, 0.12], "fill[0].region.upper": [0.02, 0.02, 0.12],
+          "contacts[0].restitution": 0.3, "contacts[1].restitution": 0.3}
+#: 400 frictionless spheres at e = 0.3 in a 20 mm box: a sphere sliding at 1 mm/s in a pocket
+#: of three resting spheres met them 4.4e-16 s apart, which the collapse guard and the wedge
+#: rule did not count as one instant until _loop.NO_PROGRESS_REL (before: 4e-16 s), and the
+#: run went on without end.
+POCKET_ROUNDING = {**POCKET, "fill[0].count": 400}
+CHAIN = {"scene.seed": 1, "scene.effects": ["gravity", "rotation", "friction",
+                                            "rolling_resistance"],
+         "fill[0].count": 400, "walls[0].upper": [0.012, 0.012, 0.12],
+         "fill[0].region.upper": [0.012, 0.012, 0.12], "contacts[0].restitution": 0.8,
+         "contacts[1].restitution": 0.8, "contacts[0].rolling_friction": 0.01,
+         "contacts[1].rolling_friction": 0.01}
+
+
+#: Collisions the variant pours may take to 1 s (measured up to ~2e6).
+VARIANT_MAX_COLLISIONS = 6_000_000
+
+
+@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="a pour takes seconds compiled, hours "
+                                                       "in pure Python")
+@pytest.mark.parametrize("over", [POCKET, POCKET_ROUNDING, CHAIN],
+                         ids=["pocket_on_the_floor", "pocket_apart_by_rounding", "chain"])
+def test_pour_variants_with_wedged_spheres_settle(over):
+    scene = load_scene("tools/scenes/small_pour.toml", overrides=over)
+    sim = Simulation(scene, log_events=True)
+    blocks = []
+    # a collision budget (measured: at most 2e6 to 1 s), so that an endless loop fails the
+    # test instead of hanging it
+    summary = sim.run(max_collisions=VARIANT_MAX_COLLISIONS,
+                      observers=[SimpleNamespace(on_events=blocks.append)])
+    assert sim.time == scene.duration
+    assert summary.events["wedge"] >= 1
+    ev = EventBlock.concatenate(blocks)
+    stops = ev.kind == EV_WEDGE
+    assert stops.sum() == summary.events["wedge"]  # each stop is in the event log
+    if over is POCKET:
+        assert (ev.stage[stops] == MS_REST).any()  # stopped on the floor, not in flight
     assert_at_rest_in_the_box_without_overlap(scene, sim)
 
 

@@ -1,4 +1,5 @@
-"""tools/settle_report.py runs and reports how far a settling scene gets (smoke test)."""
+"""tools/settle_report.py and tools/settle_variants.py run and report how far settling scenes get
+(smoke tests)."""
 
 import re
 from pathlib import Path
@@ -21,3 +22,14 @@ def test_settle_report_default_scenes_exist(load_tool):
     tool = load_tool("settle_report")
     for path in tool.DEFAULT_SCENES:
         assert path.is_file(), path
+
+
+def test_settle_variants_runs_a_case_of_the_grid(capsys, load_tool):
+    tool = load_tool("settle_variants")
+    # one case: 20 spheres of the small pour for 10 ms (they are still falling)
+    assert tool.main(["--until", "0.01", "--restitution", "0.5", "--count", "20",
+                      "--width", "0.015", "--effects", "rolling", "--seeds", "4"]) == 0
+    out = capsys.readouterr().out
+    assert re.search(r"^0\.5 20 rolling 0\.015 4 ok, wedge stops 0; at rest 0/20; wall ",
+                     out, re.MULTILINE)
+    assert out.rstrip().endswith("0 of 1 cases reached the collapse guard")
