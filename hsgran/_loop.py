@@ -138,8 +138,8 @@ MAX_ZERO_TIME_EVENTS = 1000
 #: simultaneous hit, far below the collapse guard.
 JAM_EVENTS = 64
 #: Events of one sphere in succession without its clock advancing (NO_PROGRESS_REL) after which
-#: a collision with an immovable body (a plane at rest, or a sphere the collision leaves at
-#: rest) stops it: see _wedge_stop. Above JAM_EVENTS, so that a jammed sphere that can fall
+#: a collision with an immovable body (a plane, or a sphere the collision leaves at rest) stops
+#: it: see _wedge_stop. Above JAM_EVENTS, so that a jammed sphere that can fall
 #: asleep on an upward contact does so first; far below the collapse guard
 #: (MAX_ZERO_TIME_EVENTS).
 WEDGE_EVENTS = 128
@@ -621,14 +621,22 @@ def _note_rapid(p, t, t_last, rapid, tc):
         rapid[p] = 0
 
 
+@njit(inline="always")
+def _holds(p, v0x, v0y, v0z, mstate, zstreak):
+    """Whether sphere p, which met a collision with velocity v0, is immovable for the wedge
+    rule (_wedge_stop): at rest after it, or stopped by the rule at this instant."""
+    return mstate[p] == MS_REST or (zstreak[p] >= WEDGE_EVENTS and v0x == 0.0 and v0y == 0.0
+                                    and v0z == 0.0)
+
+
 @njit
 def _wedge_stop(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
                 rotation):
     """Stop sphere p, which has just collided with an immovable body after at least
     WEDGE_EVENTS events in succession at one instant (NO_PROGRESS_REL), if it moves (in
     flight, or sliding or rolling on a plane); returns whether it was stopped. Immovable: a
-    plane at rest, a sphere the collision leaves at rest, or a sphere stopped here at this
-    instant (it met the collision at standstill); the caller decides.
+    plane (planes never move), a sphere the collision leaves at rest, or a sphere stopped
+    here at this instant (it met the collision at standstill); the caller decides (_holds).
 
     Such a sequence is a sphere wedged between immovable bodies: between a side wall and a
     sleeper leaning over it, on the floor in a pocket of a wall and resting spheres, or in a
@@ -869,15 +877,6 @@ def _tc_row(row, t, t1, t2, fsc, row_tc):
         row_tc[P_E_FIXED] = TC_RESTITUTION
         return row_tc, True
     return row, False
-
-
-@njit(inline="always")
-def _plane_at_rest(w, walls):
-    """Whether plane w neither moves nor turns."""
-    planes_vel, planes_omg = walls[3], walls[4]
-    return (planes_vel[w, 0] == 0.0 and planes_vel[w, 1] == 0.0 and planes_vel[w, 2] == 0.0
-            and planes_omg[w, 0] == 0.0 and planes_omg[w, 1] == 0.0
-            and planes_omg[w, 2] == 0.0)
 
 
 @njit(inline="always")
@@ -1285,10 +1284,8 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
                 # against one stopped in such a sequence at this instant (met at standstill:
                 # a chain between immovable ends, see _wedge_stop); not after a hop, whose
                 # separation is what ends its zero-time meetings
-                i_holds = mstate[i] == MS_REST or (
-                    zstreak[i] >= WEDGE_EVENTS and vi0x == 0.0 and vi0y == 0.0 and vi0z == 0.0)
-                j_holds = mstate[j] == MS_REST or (
-                    zstreak[j] >= WEDGE_EVENTS and vj0x == 0.0 and vj0y == 0.0 and vj0z == 0.0)
+                i_holds = _holds(i, vi0x, vi0y, vi0z, mstate, zstreak)
+                j_holds = _holds(j, vj0x, vj0y, vj0z, mstate, zstreak)
                 if not hopped and j_holds and _wedge_stop(i, t, flight, dyn, walls, gravity,
                                                           pair_table, fsc, friction, rolling,
                                                           rotation):
@@ -1371,10 +1368,11 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
                                  fsc, friction, rolling, rotation)
                     counts[EV_LAND] += 1
                     landed = True
-            if (grav_on and not landed and _plane_at_rest(w, walls)
-                    and _wedge_stop(i, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
-                                    rolling, rotation)):
-                wedged_a = i  # a zero-time sequence against this plane
+            # a zero-time sequence against this plane (planes never move: immovable)
+            if grav_on and not landed and _wedge_stop(i, t, flight, dyn, walls, gravity,
+                                                      pair_table, fsc, friction, rolling,
+                                                      rotation):
+                wedged_a = i
             counter[i] += 1
             _note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
             t_last[i] = t

@@ -329,9 +329,13 @@ def test_pour_of_2000_spheres_settles_to_rest_without_overlap():
 WEDGED_SEEDS = (1, 3)
 
 
+#: 200 spheres at e = 0.5 in a 15 mm box, to 1 s (also the base of tools/settle_variants.py).
+SMALL_POUR = "tools/scenes/small_pour.toml"
+
+
 def small_pour(seed):
     """tools/scenes/small_pour.toml (200 spheres, e = 0.5, to 1 s) with this seed."""
-    return load_scene("tools/scenes/small_pour.toml", overrides={"scene.seed": seed})
+    return load_scene(SMALL_POUR, overrides={"scene.seed": seed})
 
 
 @pytest.mark.skipif(numba.config.DISABLE_JIT, reason="a pour takes ~10 s compiled, hours "
@@ -376,7 +380,7 @@ VARIANT_MAX_COLLISIONS = 6_000_000
 @pytest.mark.parametrize("over", [POCKET, POCKET_ROUNDING, CHAIN],
                          ids=["pocket_on_the_floor", "pocket_apart_by_rounding", "chain"])
 def test_pour_variants_with_wedged_spheres_settle(over):
-    scene = load_scene("tools/scenes/small_pour.toml", overrides=over)
+    scene = load_scene(SMALL_POUR, overrides=over)
     sim = Simulation(scene, log_events=True)
     blocks = []
     # a collision budget (measured: at most 2e6 to 1 s), so that an endless loop fails the
