@@ -48,3 +48,46 @@ def njit(func=None, **options):
     if func is None:
         return lambda f: _njit(**opts)(f)
     return _njit(**opts)(func)
+
+
+def _prefetch_intrinsic():
+    """A compiled ``prefetch(array, i)``: a hint to the CPU to load the cache line of
+    ``array[i]`` (its first element if 2-D) while other work goes on (LLVM ``llvm.prefetch``,
+    read, high locality). It never faults and changes no result."""
+    from llvmlite import ir
+    from numba import types
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def prefetch(typingctx, array, index):
+        if not isinstance(array, types.Array) or not isinstance(index, types.Integer):
+            return None
+
+        def codegen(context, builder, signature, args):
+            aryty, idxty = signature.args
+            ary = context.make_array(aryty)(context, builder, args[0])
+            i = context.cast(builder, args[1], idxty, types.intp)
+            zero = context.get_constant(types.intp, 0)
+            ptr = cgutils.get_item_pointer2(
+                context, builder, ary.data, cgutils.unpack_tuple(builder, ary.shape),
+                cgutils.unpack_tuple(builder, ary.strides), aryty.layout,
+                [i] + [zero] * (aryty.ndim - 1), wraparound=False)
+            byte_ptr = ir.IntType(8).as_pointer()
+            i32 = ir.IntType(32)
+            fnty = ir.FunctionType(ir.VoidType(), [byte_ptr, i32, i32, i32])
+            fn = cgutils.get_or_insert_function(builder.module, fnty, "llvm.prefetch.p0")
+            builder.call(fn, [builder.bitcast(ptr, byte_ptr), i32(0), i32(3), i32(1)])
+            return context.get_dummy_value()
+
+        return types.void(array, index), codegen
+
+    return prefetch
+
+
+def _prefetch_python(array, index):
+    """Plain-Python stand-in of the compiled prefetch hint (NUMBA_DISABLE_JIT=1): nothing."""
+
+
+#: ``prefetch(array, i)``: ask for the cache line of ``array[i]`` ahead of its use (a hint only).
+prefetch = _prefetch_python if numba.config.DISABLE_JIT else _prefetch_intrinsic()

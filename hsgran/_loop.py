@@ -1,11 +1,12 @@
 """The compiled event loop (layer 5; used only by :mod:`hsgran.engine`).
 
-One pending event per sphere (Smallenburg 2022), kept in an indexed binary heap together with
-one extra entry, the frame tick (index N). Each sphere's event stores the event counter of its
-partner at prediction time; a popped pair event whose partner has had an event since is stale
-and only makes the owner re-predict (lazy invalidation). Spheres are advanced only when they take
-part in an event (delayed states, DynamO); frames evaluate every sphere's parabola at the frame
-time without touching the stored states, so the output interval never changes the trajectory.
+One pending event per sphere (Smallenburg 2022), kept in an event calendar
+(:mod:`hsgran.events.calendar`) together with one extra entry, the frame tick (index N). Each
+sphere's event stores the event counter of its partner at prediction time; a popped pair event
+whose partner has had an event since is stale and only makes the owner re-predict (lazy
+invalidation). Spheres are advanced only when they take part in an event (delayed states,
+DynamO); frames evaluate every sphere's parabola at the frame time without touching the stored
+states, so the output interval never changes the trajectory.
 
 Event kinds: ``EV_PAIR`` (sphere–sphere), ``EV_WALL`` (sphere–plane), ``EV_CELL`` (a sphere
 leaves its cell; periodic wrap), and the frame tick. Pop, re-check, execute: a popped collision
@@ -24,7 +25,7 @@ import math
 
 import numpy as np
 
-from hsgran._jit import njit
+from hsgran._jit import njit, prefetch
 from hsgran.contact.model import (
     REC_E_N,
     REC_ENERGY_LOST,
@@ -34,8 +35,15 @@ from hsgran.contact.model import (
     REC_STAGE,
     resolve,
 )
+from hsgran.events.calendar import (
+    Q_SIZE,
+    calendar_build,
+    calendar_prefetch,
+    calendar_top,
+    calendar_update,
+)
 from hsgran.events.grid import insert, remove, slot_of
-from hsgran.events.queue import heap_build, heap_update
+from hsgran.events.queue import ARITY
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import (
     NEVER,
@@ -180,7 +188,8 @@ S_WIDTH = 8
 #   grid   = (origin, csize, ncell, cell, head, nxt, prv, heads, shifts, ac, ah, stack)   the last
 #            five are scratch space: 27 list heads, their image shifts (27, 3), the per-axis list
 #            coordinates and shifts (3, 3) of _predict, and a stack (N,) for waking sleepers
-#   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s)
+#   sched  = (ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, cal)   cal: the event calendar's
+#            arrays (hsgran.events.calendar), whose keys are ev_t and ev_seq
 #   out    = (fr_time, fr_pos, fr_vel, fr_omg, log_f, log_i, fr_ms)
 
 
@@ -242,6 +251,30 @@ def _note_progress(p, t, st, zstreak):
 
 
 @njit(inline="always")
+def _prefetch_cells(i, cell, ncell, head):
+    """Ask for the list heads of the cells around sphere i's, ahead of its prediction (a hint
+    only; the z-neighbours of a cell share its cache line mostly)."""
+    nx = ncell[0]
+    ny = ncell[1]
+    nz = ncell[2]
+    # (a coordinate is out of range only on a non-periodic axis, which is hashed)
+    cx = cell[i, 0]
+    cy = cell[i, 1]
+    cz = cell[i, 2]
+    if not (0 <= cx < nx and 0 <= cy < ny and 0 <= cz < nz):
+        cx %= nx
+        cy %= ny
+        cz %= nz
+    for a in range(3):
+        x = cx + a - 1
+        x = nx - 1 if x < 0 else (0 if x >= nx else x)
+        for b in range(3):
+            y = cy + b - 1
+            y = ny - 1 if y < 0 else (0 if y >= ny else y)
+            prefetch(head, (x * ny + y) * nz + cz)
+
+
+@njit(inline="always")
 def _axis_cells(c, n, length, periodic, k, ac, ah):
     """Write the neighbouring list coordinates along axis k and the image shift of each.
 
@@ -294,7 +327,7 @@ def _axis_cells(c, n, length, periodic, k, ac, ah):
 
 @njit(inline="always")
 def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
-    """Find sphere i's next event after t_now and store it (the heap is updated by the caller).
+    """Find sphere i's next event after t_now and store it (the caller moves its calendar entry).
 
     ``layer`` ≥ 0 (without gravity only): i has just crossed that cell face (EV_CELL code) and
     its trajectory is unchanged since its last prediction. Then only the spheres in the new layer
@@ -405,6 +438,9 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
                     shifts[m, 2] = ah[2, c]
                     m += 1
     for q in range(m):
+        prefetch(st, heads[q])
+        prefetch(nxt, heads[q])
+    for q in range(m):
         j = heads[q]
         ox = xi - shifts[q, 0]
         oy = yi - shifts[q, 1]
@@ -448,14 +484,6 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
     isc[I_SEQ] += 1
 
 
-@njit(inline="always")
-def _reschedule(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
-    """Predict sphere i's next event and move its heap entry accordingly (``layer``: see
-    :func:`_predict`)."""
-    _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer)
-    heap_update(sched[5], sched[6], sched[7], sched[8], i, sched[0][i], sched[1][i])
-
-
 # The prediction is the hot path: run_loop inlines it at one place only (the re-predictions an
 # event asks for wait in isc[I_PEND_*] until the top of the next iteration), and every other
 # caller goes through these compiled functions. Inlining it at each call site made the loop
@@ -468,9 +496,10 @@ def _predict_fn(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
 
 @njit
 def _reschedule_fn(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
-    """:func:`_reschedule` as a compiled function (for cold callers)."""
+    """Predict sphere i's next event (all neighbours) and move its calendar entry accordingly
+    (for cold callers)."""
     _predict_fn(i, t_now, flight, walls, space, grid, sched, isc, grav_on)
-    heap_update(sched[5], sched[6], sched[7], sched[8], i, sched[0][i], sched[1][i])
+    calendar_update(sched[5], sched[0], sched[1], i)
 
 
 @njit(inline="always")
@@ -1008,7 +1037,7 @@ def _log(out, isc, t, jn, jt, en, kind, i, other, stage, regime):
 
 @njit
 def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
-    """Predict every sphere's first event and build the heap (``flags``: see ``FL_*``)."""
+    """Predict every sphere's first event and build the calendar (``flags``: see ``FL_*``)."""
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
     grav_on = flags[FL_GRAVITY]
     no_end = np.int64(END_NONE)
@@ -1029,7 +1058,29 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
                                  pair_table, fsc, friction, rolling, rotation)
     for i in range(st.shape[0]):
         _predict_fn(i, 0.0, flight, walls, space, grid, sched, isc, grav_on)
-    heap_build(sched[5], sched[6], sched[7], sched[8], sched[0], sched[1])
+    calendar_build(sched[5], sched[0], sched[1], 0.0)
+
+
+@njit(inline="always")
+def _prefetch_next(cal, ev_t, st, cell, n):
+    """Ask for the records of the sphere that is likely to have the event after the one at the
+    top of the calendar (the earliest of the top's children in its heap), so that they are in
+    the cache when its turn comes (a hint: nothing changes if the guess is wrong)."""
+    heap, key_t = cal[0], cal[2]
+    last = min(ARITY, cal[7][Q_SIZE] - 1)
+    if last < 1:
+        return -1
+    best = 1
+    for c in range(2, last + 1):
+        if key_t[c] < key_t[best]:
+            best = c
+    e = heap[best]
+    if e >= n:
+        return -1
+    prefetch(ev_t, e)
+    prefetch(st, e)
+    prefetch(cell, e)
+    return e
 
 
 @njit
@@ -1056,22 +1107,35 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
     planes_n, planes_mat, planes_vel, planes_omg = walls[1], walls[2], walls[3], walls[4]
     gravity, box_len, periodic = space
     ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
-    ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, heap, where, key_t, key_s = sched
+    ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, cal = sched
     fr_time, fr_pos, fr_vel, fr_omg, fr_ms = out[0], out[1], out[2], out[3], out[6]
     n = st.shape[0]
     t_end = fsc[F_T_END]
     executed = 0
+    guess = -1  # the sphere likely to have the next event (_prefetch_next)
     while True:
+        if guess >= 0 and ev_kind[guess] == EV_PAIR:
+            # its record has arrived meanwhile: ask for its partner's too
+            prefetch(st, ev_partner[guess])
+            prefetch(ev_t, ev_partner[guess])
+        # predict both spheres first, then move their calendar entries: the places in the
+        # calendar that the moves touch are asked for (prefetched) meanwhile
+        pa = isc[I_PEND_A]
+        pb = isc[I_PEND_B]
         for slot in range(I_PEND_A, I_PEND_B + 1):
             p = isc[slot]
             if p >= 0:
                 isc[slot] = -1
                 layer = isc[I_PEND_LAYER] if slot == I_PEND_A else -1
                 isc[I_PEND_LAYER] = -1
-                _reschedule(p, fsc[F_T_CUR], flight, walls, space, grid, sched, isc, grav_on,
-                            layer)
-        e = heap[0]
-        t = key_t[0]
+                _predict(p, fsc[F_T_CUR], flight, walls, space, grid, sched, isc, grav_on, layer)
+                calendar_prefetch(cal, ev_t, p)
+        if pa >= 0:
+            calendar_update(cal, ev_t, ev_seq, pa)
+        if pb >= 0:
+            calendar_update(cal, ev_t, ev_seq, pb)
+        e, t = calendar_top(cal, ev_t, ev_seq)
+        guess = _prefetch_next(cal, ev_t, st, cell, n)
         if t > t_end or t == NEVER:
             # a frame due at t_end whose time k × frame_dt rounded above it is still taken
             # (0.3 s is not 6 × 0.05 s in floating point)
@@ -1103,7 +1167,7 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
             ev_t[n] = isc[I_FRAME_INDEX] * fsc[F_FRAME_DT]
             ev_seq[n] = isc[I_SEQ]
             isc[I_SEQ] += 1
-            heap_update(heap, where, key_t, key_s, n, ev_t[n], ev_seq[n])
+            calendar_update(cal, ev_t, ev_seq, n)
             counts[EV_FRAME] += 1
             if f + 1 == fr_time.shape[0]:
                 return STATUS_FRAMES_FULL
@@ -1116,11 +1180,13 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
         tc_on = False
         if kind == EV_PAIR:
             j = np.int64(ev_partner[i])  # one integer type for sphere indices: one compile
+            _prefetch_cells(i, cell, ncell, head)
             if counter[j] != ev_pcount[i]:
                 # stale: the partner moved on since this was predicted; re-predict the owner
                 _repredict_later(isc, i)
                 counts[EV_STALE] += 1
                 continue
+            _prefetch_cells(j, cell, ncell, head)
             _note_progress(i, t, st, zstreak)
             _note_progress(j, t, st, zstreak)
             _advance(st, acc, omg, alpha, i, t, grav_on, rotation)
@@ -1413,6 +1479,7 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
             cell[i, k] = c
             remove(i, old, head, nxt, prv)
             insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
+            _prefetch_cells(i, cell, ncell, head)
             _repredict_later(isc, i)  # into I_PEND_A: the top of the loop emptied both slots
             isc[I_PEND_LAYER] = code  # look at the new layer of neighbours only
             counts[EV_CELL] += 1

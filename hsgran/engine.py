@@ -3,7 +3,7 @@
 How a run proceeds (:meth:`Simulation.run`)::
 
     build state (struct of arrays; angular velocities only with `rotation`)
-    predict every sphere's next event; schedule the frame tick at t = 0; build the heap
+    predict every sphere's next event; schedule the frame tick at t = 0; build the event calendar
     repeat, in compiled code (hsgran._loop.run_loop):
         pop the earliest entry
         frame tick  -> sample every sphere's parabola at that time into the frame buffer
@@ -20,12 +20,12 @@ Observers are plain objects with any of ``on_frames(block)``, ``on_events(block)
 a renderer.
 
 Checkpoints (:meth:`Simulation.checkpoint`, :meth:`Simulation.restore`) hold every array the
-compiled loop reads or writes, except the heap: the heap is rebuilt from each sphere's pending
-event (time, sequence number), whose order is total, so a restored run pops the same events in
-the same order and continues bit for bit. They are taken only between compiled calls, when no
-event is half done and every buffered frame has been handed to the observers; where the calls
-are cut does not change the run (a call that stops at a checkpoint time leaves no pending
-re-prediction behind, and the next one starts from the same heap).
+compiled loop reads or writes, except the event calendar: it is rebuilt from each sphere's
+pending event (time, sequence number), whose order is total, so a restored run pops the same
+events in the same order and continues bit for bit. They are taken only between compiled
+calls, when no event is half done and every buffered frame has been handed to the observers;
+where the calls are cut does not change the run (a call that stops at a checkpoint time leaves
+no pending re-prediction behind, and the next one starts from the same pending events).
 """
 
 from __future__ import annotations
@@ -40,8 +40,8 @@ import numpy as np
 from hsgran import _loop as ev
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
+from hsgran.events.calendar import calendar_build, new_calendar
 from hsgran.events.grid import cell_coordinates, insert, plan_grid, slot_of
-from hsgran.events.queue import heap_build, new_heap
 from hsgran.materials import SOLID_SPHERE_INERTIA
 from hsgran.onplane import CONVENTION_A, CONVENTION_B
 
@@ -56,13 +56,13 @@ LOG_BUFFER = 1 << 16
 EVENTS_PER_CALL = 200_000
 #: Version of the checkpoint layout (:meth:`Simulation.checkpoint`); a checkpoint of another
 #: version is refused rather than misread (2: the pair contacts kept for cell crossings; 3: the
-#: "wedge" event count).
-CHECKPOINT_VERSION = 3
+#: "wedge" event count; 4: per-sphere fields at least FIELD_MIN long).
+CHECKPOINT_VERSION = 4
 #: Array groups of ``hsgran._loop`` whose arrays a checkpoint holds (the frame and log buffers,
 #: the seventh group, are empty at every checkpoint).
 CHECKPOINT_GROUPS = ("flight", "dyn", "walls", "space", "grid", "sched")
-#: Entries of the ``sched`` group that make up the heap: rebuilt, not stored.
-HEAP_ENTRIES = 4
+#: Entries of the ``sched`` group that make up the event calendar (one tuple): rebuilt, not stored.
+CALENDAR_ENTRIES = 1
 
 
 class SimulationError(HsgranError):
@@ -167,6 +167,49 @@ def _aligned_rows(n: int, width: int) -> np.ndarray:
     return buf[off:off + n * width].reshape(n, width)
 
 
+#: Each sphere's bookkeeping in one record of two cache lines (from PACKED_FROM spheres on),
+#: so that an event on a sphere fetches it in one go instead of one line from each of a dozen
+#: arrays (at N = 10⁶ these arrays do not fit the cache and every separate array costs a miss).
+#: The loop sees each field as an array of its own (a strided view), so its code is the same as
+#: with separate arrays. First line: the pending event and the kept pair contact (read at every
+#: pop and prediction); second line: the sphere's constants, collision history, calendar
+#: position and cell.
+SPHERE_RECORD = np.dtype({
+    "names": ["ev_t", "ev_seq", "ev_pcount", "counter", "pc_t", "pc_count", "ev_partner",
+              "pc_partner", "ev_kind", "inv_m", "inv_i", "t_last", "where", "mat", "zstreak",
+              "rapid", "cell", "qnext", "qprev"],
+    "formats": ["f8", "i8", "i8", "i8", "f8", "i8", "i4", "i4", "i1", "f8", "f8", "f8", "i8",
+                "i4", "i4", "i4", ("i4", (3,)), "i4", "i4"],
+    "offsets": [0, 8, 16, 24, 32, 40, 48, 52, 56, 64, 72, 80, 88, 96, 100, 104, 108, 120, 124],
+    "itemsize": 2 * CACHE_LINE})
+
+
+#: Fewest entries of a record field that the loop sees: numpy calls an array of one element
+#: contiguous whatever its stride, and numba would compile a second loop for a one-sphere scene
+#: (or for the one-entry dummies); below this the entries beyond the spheres are unused.
+FIELD_MIN = 2
+
+
+#: Spheres from which their fields are packed in records (SPHERE_RECORD). Below, each field is
+#: an array of its own: everything then fits the cache, and the packed fields (strided arrays
+#: for the compiled code) would save no misses. The compiled loop has a version for each
+#: layout (a second compile for the first scene of 2¹⁶ spheres or more).
+PACKED_FROM = 1 << 16
+
+
+def _sphere_fields(n: int, packed: bool) -> dict[str, np.ndarray]:
+    """Zeroed arrays of ``n`` entries of every :data:`SPHERE_RECORD` field, by name: fields
+    of one record array whose first record starts a cache-line pair, or separate arrays."""
+    if packed:
+        size = SPHERE_RECORD.itemsize
+        buf = np.zeros((n + 1) * size, dtype=np.uint8)
+        off = -buf.ctypes.data % size
+        rec = buf[off:off + n * size].view(SPHERE_RECORD)
+        return {name: rec[name] for name in SPHERE_RECORD.names}
+    return {name: np.zeros(n, dtype=SPHERE_RECORD.fields[name][0])
+            for name in SPHERE_RECORD.names}
+
+
 class Simulation:
     """An event-driven run of a :class:`~hsgran.scene.Scene`.
 
@@ -177,10 +220,13 @@ class Simulation:
         log_events: Record every collision (see :class:`EventBlock`).
         frame_buffer: Frames buffered between observer calls (default from
             :data:`FRAME_BUFFER_BYTES`).
+        calendar_buckets: Whether the event calendar uses time buckets (default: from
+            ``hsgran.events.calendar.BUCKETS_FROM`` spheres on). The events and their order are
+            the same either way; only the speed differs (for tests and benchmarks).
     """
 
     def __init__(self, scene, *, brute_force: bool = False, log_events: bool = False,
-                 frame_buffer: int | None = None):
+                 frame_buffer: int | None = None, calendar_buckets: bool | None = None):
         self.scene = scene
         eff = scene.effects
         n = scene.n
@@ -205,16 +251,23 @@ class Simulation:
         self.radius[:] = scene.radius
         self.omg = (np.ascontiguousarray(scene.angular_velocity, dtype=np.float64).copy()
                     if self.rotation else np.zeros((1, 3)))
+        # one record per sphere (SPHERE_RECORD, PACKED_FROM), and one more for the frame tick's
+        # event (entry n); the per-sphere fields are m long (FIELD_MIN)
+        m = max(n, FIELD_MIN)
+        rec = _sphere_fields(m + 1, n >= PACKED_FROM)
         self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)
-        self.inv_m = 1.0 / self.mass
-        self.inv_i = 1.0 / (SOLID_SPHERE_INERTIA * self.mass * self.radius**2)
+        self.inv_m = rec["inv_m"][:n]
+        self.inv_m[:] = 1.0 / self.mass
+        self.inv_i = rec["inv_i"][:n]
+        self.inv_i[:] = 1.0 / (SOLID_SPHERE_INERTIA * self.mass * self.radius**2)
         self.inertia = SOLID_SPHERE_INERTIA * self.mass * self.radius**2  # [kg m²]
         #: mechanical energy of the scene as given [J] (before spheres are put on planes)
         self.energy0 = float(_mechanical(*self._energies(
             self.pos[None], self.vel[None], self.omg[None] if self.rotation else None))[0])
-        self.mat = np.ascontiguousarray(scene.material, dtype=np.int32)
-        self.counter = np.zeros(n, dtype=np.int64)
-        self.zstreak = np.zeros(n, dtype=np.int32)
+        self.mat = rec["mat"][:n]
+        self.mat[:] = scene.material
+        self.counter = rec["counter"][:n]
+        self.zstreak = rec["zstreak"][:n]
         # motion states (hsgran.onplane): only with gravity can a sphere rest on a plane
         ng = n if eff.gravity else 1
         self.acc = np.tile(self.gravity, (ng, 1))
@@ -227,11 +280,14 @@ class Simulation:
         # without gravity: each sphere's earliest pair contact at its last prediction
         # (hsgran._loop._predict)
         nc = 1 if eff.gravity else n
-        self.pc_t = np.full(nc, np.inf)
-        self.pc_partner = np.full(nc, -1, dtype=np.int32)
-        self.pc_count = np.zeros(nc, dtype=np.int64)
-        self.t_last = np.full(n, -np.inf)  # time of each sphere's last collision (TC model)
-        self.rapid = np.zeros(n, dtype=np.int32)  # collisions in succession within tc (jams)
+        self.pc_t = rec["pc_t"][:nc]
+        self.pc_t[:] = np.inf
+        self.pc_partner = rec["pc_partner"][:nc]
+        self.pc_partner[:] = -1
+        self.pc_count = rec["pc_count"][:nc]
+        self.t_last = rec["t_last"][:n]  # time of each sphere's last collision (TC model)
+        self.t_last[:] = -np.inf
+        self.rapid = rec["rapid"][:n]  # collisions in succession within tc (jams)
         self.pair_table = np.ascontiguousarray(scene.pair_table())
         planes = list(scene.planes)
         self.planes_p = np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3)
@@ -254,8 +310,9 @@ class Simulation:
             self.ncell = np.ones(3, dtype=np.int64)
         elif np.any(self.periodic & (self.ncell < 3)):
             raise SimulationError("a periodic axis needs at least 3 cells of one largest diameter")
-        self.cell = cell_coordinates(self.pos, self.origin, self.csize, self.ncell,
-                                     self.periodic).astype(np.int32)
+        self.cell = rec["cell"][:n]
+        self.cell[:] = cell_coordinates(self.pos, self.origin, self.csize, self.ncell,
+                                        self.periodic)
         self.head = np.full(int(np.prod(self.ncell)), -1, dtype=np.int32)
         self.nxt = np.full(n, -1, dtype=np.int32)
         self.prv = np.full(n, -1, dtype=np.int32)
@@ -263,12 +320,15 @@ class Simulation:
             insert(i, slot_of(self.cell[i, 0], self.cell[i, 1], self.cell[i, 2], self.ncell),
                    self.head, self.nxt, self.prv)
         # one pending event per sphere, entry n is the frame tick
-        self.ev_t = np.full(n + 1, np.inf)
-        self.ev_seq = np.zeros(n + 1, dtype=np.int64)
-        self.ev_kind = np.zeros(n + 1, dtype=np.int8)
-        self.ev_partner = np.full(n + 1, -1, dtype=np.int32)
-        self.ev_pcount = np.zeros(n + 1, dtype=np.int64)
-        self.heap, self.where, self.key_t, self.key_s = new_heap(n + 1)
+        self.ev_t = rec["ev_t"][:n + 1]
+        self.ev_t[:] = np.inf
+        self.ev_seq = rec["ev_seq"][:n + 1]
+        self.ev_kind = rec["ev_kind"][:n + 1]
+        self.ev_partner = rec["ev_partner"][:n + 1]
+        self.ev_partner[:] = -1
+        self.ev_pcount = rec["ev_pcount"][:n + 1]
+        self.calendar = new_calendar(n + 1, rec["where"][:n + 1], rec["qnext"][:n + 1],
+                                     rec["qprev"][:n + 1], calendar_buckets)
         self.fsc = np.zeros(ev.F_SIZE)
         self.fsc[ev.F_FRAME_DT] = scene.frame_interval
         self.fsc[ev.F_LANDING_SPEED] = scene.effective_landing_speed
@@ -296,19 +356,24 @@ class Simulation:
         self.ev_seq[n] = 0
         self.isc[ev.I_SEQ] = 1
         # the array groups of hsgran._loop (see its module notes); the tuples hold references,
-        # so the compiled code updates these arrays in place
+        # so the compiled code updates these arrays in place. The loop sees the per-sphere
+        # record fields m ≥ FIELD_MIN long (the attributes above are the first n entries).
+        f = {name: rec[name][:m] for name in ("inv_m", "inv_i", "mat", "counter", "zstreak",
+                                              "t_last", "rapid", "cell")}
+        f.update({name: rec[name][:max(nc, FIELD_MIN)]
+                  for name in ("pc_t", "pc_partner", "pc_count")})
         self._groups = (
-            (self.state, self.counter, self.acc, self.mstate, self.mplane, self.seg_end,
-             self.seg_code, self.pc_t, self.pc_partner, self.pc_count),
-            (self.omg, self.inv_m, self.inv_i, self.mat, self.zstreak, self.alpha, self.seg_dir,
-             self.t_last, np.zeros(self.pair_table.shape[-1]), self.rapid),
+            (self.state, f["counter"], self.acc, self.mstate, self.mplane, self.seg_end,
+             self.seg_code, f["pc_t"], f["pc_partner"], f["pc_count"]),
+            (self.omg, f["inv_m"], f["inv_i"], f["mat"], f["zstreak"], self.alpha,
+             self.seg_dir, f["t_last"], np.zeros(self.pair_table.shape[-1]), f["rapid"]),
             (self.planes_p, self.planes_n, self.planes_mat, self.planes_vel, self.planes_omg),
             (self.gravity, self.box_len, self.periodic),
-            (self.origin, self.csize, self.ncell, self.cell, self.head, self.nxt, self.prv,
+            (self.origin, self.csize, self.ncell, f["cell"], self.head, self.nxt, self.prv,
              np.zeros(27, dtype=np.int32), np.zeros((27, 3)), np.zeros((3, 3), dtype=np.int64),
              np.zeros((3, 3)), np.zeros(n if eff.gravity else 1, dtype=np.int32)),
-            (self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount, self.heap,
-             self.where, self.key_t, self.key_s),
+            (self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount,
+             self.calendar),
             (self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.log_f,
              self.log_i, self.fr_ms),
         )
@@ -412,7 +477,7 @@ class Simulation:
         """The arrays a checkpoint holds, by name (views of the live arrays)."""
         arrays = {}
         for name, group in zip(CHECKPOINT_GROUPS, self._groups, strict=False):
-            stored = len(group) - (HEAP_ENTRIES if name == "sched" else 0)
+            stored = len(group) - (CALENDAR_ENTRIES if name == "sched" else 0)
             for k in range(stored):
                 arrays[f"{name}{k}"] = group[k]
         arrays.update(fsc=self.fsc, isc=self.isc, counts=self.counts, rec=self.rec)
@@ -438,7 +503,7 @@ class Simulation:
         return {k: (a.shape, a.dtype) for k, a in self._state_arrays().items()}
 
     def restore(self, checkpoint: Checkpoint) -> None:
-        """Continue from ``checkpoint``: copy its arrays in and rebuild the heap.
+        """Continue from ``checkpoint``: copy its arrays in and rebuild the event calendar.
 
         Args:
             checkpoint: Taken from a simulation of the same scene (and event logging).
@@ -462,7 +527,7 @@ class Simulation:
         for name, target in live.items():
             target[...] = checkpoint.arrays[name]
         sched = self._groups[5]
-        heap_build(sched[5], sched[6], sched[7], sched[8], sched[0], sched[1])
+        calendar_build(sched[5], sched[0], sched[1], 0.0)
         self._frames_emitted = int(checkpoint.frames)
         self._events_emitted = int(checkpoint.events)
 

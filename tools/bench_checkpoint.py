@@ -5,8 +5,8 @@
 For each size, a granular gas (every mechanical effect on, gravity, a closed box) is built and
 run for a few frames into a trajectory file; then a checkpoint is stored repeatedly (the median
 time is printed, two syncs to disk included), the file's growth per checkpoint slot is measured,
-and a resume (read the checkpoint, rebuild the run from the scene, restore, rebuild the heap) is
-timed without running further.
+and a resume (read the checkpoint, rebuild the run from the scene, restore, rebuild the event
+calendar) is timed without running further.
 """
 
 from __future__ import annotations

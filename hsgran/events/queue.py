@@ -1,17 +1,20 @@
-"""Indexed 4-ary min-heap over a fixed set of entries (one per particle, plus the frame tick).
+"""Indexed 4-ary min-heap of a varying subset of entries (layer 1).
 
-Every entry always has exactly one key (time, seq); ``inf`` means "nothing scheduled". Ties in
-time are broken by the sequence number ``seq``, which the scheduler increments at every
-prediction: the order is total, so runs are bit-for-bit reproducible (DESIGN.md §3).
+The event calendar (:mod:`hsgran.events.calendar`) keeps the events of its current time bucket
+here. Ties in time are broken by the sequence number ``seq``, which the scheduler increments at
+every prediction: the order is total, so runs are bit-for-bit reproducible (DESIGN.md §3).
 
-Layout, chosen for the cache (the heap is touched at every event, at random entries):
+Layout, chosen for the cache:
 
-- ``heap[p]`` is the entry at heap position p and ``where[e]`` the position of entry e, so an
-  entry's key is changed in O(log n) without searching;
+- ``heap[p]`` is the entry at heap position p (0 ≤ p < size) and ``where[e]`` the position of an
+  entry e that is in the heap, so an entry's key is changed or removed in O(log size) without
+  searching;
 - the keys are stored in heap order (``key_t[p]``, ``key_s[p]``), so a sift compares neighbouring
   memory instead of jumping to each entry's own record;
 - four children per node (positions 4p + 1 … 4p + 4, adjacent in memory) halve the depth of a
   binary heap for the price of three comparisons per level.
+
+The caller keeps ``size``; :func:`heap_push` and :func:`heap_remove` return the new one.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ ARITY = 4
 
 
 @njit(inline="always")
-def _before(ta, sa, tb, sb):
+def before(ta, sa, tb, sb):
     """Key (ta, sa) comes strictly before (tb, sb)."""
     return ta < tb or (ta == tb and sa < sb)
 
@@ -35,7 +38,7 @@ def _sift_up(heap, where, key_t, key_s, pos, e, t, s):
     """Place entry e with key (t, s) at or above ``pos``; returns its final position."""
     while pos > 0:
         parent = (pos - 1) // ARITY
-        if not _before(t, s, key_t[parent], key_s[parent]):
+        if not before(t, s, key_t[parent], key_s[parent]):
             break
         p = heap[parent]
         heap[pos] = p
@@ -51,23 +54,22 @@ def _sift_up(heap, where, key_t, key_s, pos, e, t, s):
 
 
 @njit
-def _sift_down(heap, where, key_t, key_s, pos, e, t, s):
-    """Place entry e with key (t, s) at or below ``pos``."""
-    n = heap.shape[0]
+def _sift_down(heap, where, key_t, key_s, size, pos, e, t, s):
+    """Place entry e with key (t, s) at or below ``pos`` in a heap of ``size`` positions."""
     while True:
         first = ARITY * pos + 1
-        if first >= n:
+        if first >= size:
             break
         best = first
         bt = key_t[first]
         bs = key_s[first]
-        last = min(first + ARITY, n)
+        last = min(first + ARITY, size)
         for c in range(first + 1, last):
-            if _before(key_t[c], key_s[c], bt, bs):
+            if before(key_t[c], key_s[c], bt, bs):
                 best = c
                 bt = key_t[c]
                 bs = key_s[c]
-        if not _before(bt, bs, t, s):
+        if not before(bt, bs, t, s):
             break
         b = heap[best]
         heap[pos] = b
@@ -82,26 +84,38 @@ def _sift_down(heap, where, key_t, key_s, pos, e, t, s):
 
 
 @njit
-def heap_build(heap, where, key_t, key_s, t, seq):
-    """Arrange entries 0..n−1 with keys (t[e], seq[e]) into a heap."""
-    n = heap.shape[0]
-    for k in range(n):
-        heap[k] = k
-        where[k] = k
-        key_t[k] = t[k]
-        key_s[k] = seq[k]
-    for k in range((n - 2) // ARITY, -1, -1):
-        _sift_down(heap, where, key_t, key_s, k, heap[k], key_t[k], key_s[k])
+def heap_push(heap, where, key_t, key_s, size, e, t, s):
+    """Add entry e (not in the heap) with key (t, s); returns the new size."""
+    _sift_up(heap, where, key_t, key_s, size, e, t, s)
+    return size + 1
 
 
 @njit
-def heap_update(heap, where, key_t, key_s, e, t, s):
-    """Give entry ``e`` the new key (t, s) and restore the heap."""
+def heap_change(heap, where, key_t, key_s, size, e, t, s):
+    """Give entry e (in the heap) the new key (t, s) and restore the heap."""
     pos = _sift_up(heap, where, key_t, key_s, where[e], e, t, s)
-    _sift_down(heap, where, key_t, key_s, pos, e, t, s)
+    _sift_down(heap, where, key_t, key_s, size, pos, e, t, s)
 
 
-def new_heap(n: int):
-    """Arrays (heap, where, key_t, key_s) for ``n`` entries."""
-    return (np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64),
-            np.full(n, np.inf), np.zeros(n, dtype=np.int64))
+@njit
+def heap_remove(heap, where, key_t, key_s, size, e):
+    """Take entry e out of the heap (its ``where`` is left to the caller); returns the new
+    size."""
+    pos = where[e]
+    size -= 1
+    if pos < size:
+        # the last entry fills the hole and moves up or down from there
+        m = heap[size]
+        tm = key_t[size]
+        sm = key_s[size]
+        pos = _sift_up(heap, where, key_t, key_s, pos, m, tm, sm)
+        _sift_down(heap, where, key_t, key_s, size, pos, m, tm, sm)
+    return size
+
+
+def new_heap(n: int, where: np.ndarray | None = None):
+    """Arrays (heap, where, key_t, key_s) for up to ``n`` entries; ``where`` may be given (an
+    int64 array of ``n``, e.g. a field of per-entry records), else it is made."""
+    if where is None:
+        where = np.zeros(n, dtype=np.int64)
+    return (np.zeros(n, dtype=np.int64), where, np.full(n, np.inf), np.zeros(n, dtype=np.int64))
