@@ -198,8 +198,10 @@ def calendar_build(cal, key_time, key_seq, inv_w):
             t0 = key_time[e]
     if not t0 < math.inf:
         t0 = 0.0
-    if inv_w <= 0.0 and qi[Q_NB] > 0:
-        inv_w = 1.0
+    choose = inv_w <= 0.0
+    if choose:
+        inv_w = 1.0  # (without buckets it is never used, but keeps (inf − base) · w⁻¹ a number)
+    if choose and qi[Q_NB] > 0:
         gaps = np.empty(n)
         m = 0
         for e in range(n):
