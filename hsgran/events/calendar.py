@@ -173,6 +173,8 @@ def calendar_prefetch(cal, key_time, e):
     """Ask for what :func:`calendar_update` of entry e will touch: the list head of its new
     bucket and its neighbours in the list it is in (a hint only)."""
     where, bhead, qnext, qprev, qi, qf = cal[1], cal[4], cal[5], cal[6], cal[7], cal[8]
+    if qi[Q_NB] == 0:
+        return  # no buckets: every entry is in the heap, which is in the cache
     if where[e] < 0:
         if qprev[e] >= 0:
             prefetch(qnext, qprev[e])
@@ -189,14 +191,19 @@ def calendar_build(cal, key_time, key_seq, inv_w):
     finite key. ``inv_w`` [1/s]: 1 / bucket width, or 0 to choose it from the keys: about
     BUCKET_TARGET entries per bucket at the rate the keys spread out near their start (for keys
     spread like the next events of N independent spheres, exponentially with mean τ, the median
-    lies at τ ln 2 and N/τ entries fall in each second near the start)."""
+    lies at τ ln 2 and N/τ entries fall in each second near the start).
+
+    Returns:
+        Whether any key is finite (else every entry is unscheduled).
+    """
     bhead, qi, qf = cal[4], cal[7], cal[8]
     n = key_time.shape[0]
     t0 = math.inf
     for e in range(n):
         if key_time[e] < t0:
             t0 = key_time[e]
-    if not t0 < math.inf:
+    finite = t0 < math.inf
+    if not finite:
         t0 = 0.0
     choose = inv_w <= 0.0
     if choose:
@@ -222,6 +229,7 @@ def calendar_build(cal, key_time, key_seq, inv_w):
     bhead[:] = -1
     for e in range(n):
         _place(e, key_time[e], key_seq[e], cal)
+    return finite
 
 
 @njit
@@ -276,18 +284,9 @@ def calendar_top(cal, key_time, key_seq):
         if qi[Q_NB] == 0:
             return -1, math.inf  # no entries at all
         if qi[Q_LISTED] == 0:
-            # nothing in the next nb − 1 buckets: start again from the earliest key
-            if qi[Q_OVF] < 0:
+            # nothing in the next nb − 1 buckets: start again from the earliest key, if any
+            if qi[Q_OVF] < 0 or not calendar_build(cal, key_time, key_seq, qf[F_INV_W]):
                 return -1, math.inf
-            e = qi[Q_OVF]
-            t0 = math.inf
-            while e >= 0:
-                if key_time[e] < t0:
-                    t0 = key_time[e]
-                e = qnext[e]
-            if not t0 < math.inf:
-                return -1, math.inf
-            calendar_build(cal, key_time, key_seq, qf[F_INV_W])
             continue
         qi[Q_CUR] += 1
         if qi[Q_CUR] & (qi[Q_NB] - 1) == 0 and _revolution(cal, key_time, key_seq):

@@ -28,7 +28,7 @@ ARITY = 4
 
 
 @njit(inline="always")
-def before(ta, sa, tb, sb):
+def _before(ta, sa, tb, sb):
     """Key (ta, sa) comes strictly before (tb, sb)."""
     return ta < tb or (ta == tb and sa < sb)
 
@@ -38,7 +38,7 @@ def _sift_up(heap, where, key_t, key_s, pos, e, t, s):
     """Place entry e with key (t, s) at or above ``pos``; returns its final position."""
     while pos > 0:
         parent = (pos - 1) // ARITY
-        if not before(t, s, key_t[parent], key_s[parent]):
+        if not _before(t, s, key_t[parent], key_s[parent]):
             break
         p = heap[parent]
         heap[pos] = p
@@ -65,11 +65,11 @@ def _sift_down(heap, where, key_t, key_s, size, pos, e, t, s):
         bs = key_s[first]
         last = min(first + ARITY, size)
         for c in range(first + 1, last):
-            if before(key_t[c], key_s[c], bt, bs):
+            if _before(key_t[c], key_s[c], bt, bs):
                 best = c
                 bt = key_t[c]
                 bs = key_s[c]
-        if not before(bt, bs, t, s):
+        if not _before(bt, bs, t, s):
             break
         b = heap[best]
         heap[pos] = b
