@@ -41,6 +41,7 @@ from hsgran.events.calendar import (
     calendar_prefetch,
     calendar_top,
     calendar_update,
+    has_buckets,
 )
 from hsgran.events.grid import insert, remove, slot_of
 from hsgran.events.queue import ARITY
@@ -437,9 +438,10 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
                     shifts[m, 1] = ah[1, b]
                     shifts[m, 2] = ah[2, c]
                     m += 1
-    for q in range(m):
-        prefetch(st, heads[q])
-        prefetch(nxt, heads[q])
+    if has_buckets(sched[5]):  # a large system: its rows are likely not in the cache
+        for q in range(m):
+            prefetch(st, heads[q])
+            prefetch(nxt, heads[q])
     for q in range(m):
         j = heads[q]
         ox = xi - shifts[q, 0]
@@ -1113,8 +1115,12 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
     t_end = fsc[F_T_END]
     executed = 0
     guess = -1  # the sphere likely to have the next event (_prefetch_next)
+    # Prefetch hints only for large systems, whose data do not fit the cache. The calendar
+    # has buckets exactly for them, and has_buckets is a constant of its type: for small
+    # systems the hints are not even compiled in.
+    large = has_buckets(cal)
     while True:
-        if guess >= 0 and ev_kind[guess] == EV_PAIR:
+        if large and guess >= 0 and ev_kind[guess] == EV_PAIR:
             # its record has arrived meanwhile: ask for its partner's too
             prefetch(st, ev_partner[guess])
             prefetch(ev_t, ev_partner[guess])
@@ -1129,13 +1135,15 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
                 layer = isc[I_PEND_LAYER] if slot == I_PEND_A else -1
                 isc[I_PEND_LAYER] = -1
                 _predict(p, fsc[F_T_CUR], flight, walls, space, grid, sched, isc, grav_on, layer)
-                calendar_prefetch(cal, ev_t, p)
+                if large:
+                    calendar_prefetch(cal, ev_t, p)
         if pa >= 0:
             calendar_update(cal, ev_t, ev_seq, pa)
         if pb >= 0:
             calendar_update(cal, ev_t, ev_seq, pb)
         e, t = calendar_top(cal, ev_t, ev_seq)
-        guess = _prefetch_next(cal, ev_t, st, cell, n)
+        if large:
+            guess = _prefetch_next(cal, ev_t, st, cell, n)
         if t > t_end or t == NEVER:
             # a frame due at t_end whose time k × frame_dt rounded above it is still taken
             # (0.3 s is not 6 × 0.05 s in floating point)
@@ -1180,13 +1188,15 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
         tc_on = False
         if kind == EV_PAIR:
             j = np.int64(ev_partner[i])  # one integer type for sphere indices: one compile
-            _prefetch_cells(i, cell, ncell, head)
+            if large:
+                _prefetch_cells(i, cell, ncell, head)
             if counter[j] != ev_pcount[i]:
                 # stale: the partner moved on since this was predicted; re-predict the owner
                 _repredict_later(isc, i)
                 counts[EV_STALE] += 1
                 continue
-            _prefetch_cells(j, cell, ncell, head)
+            if large:
+                _prefetch_cells(j, cell, ncell, head)
             _note_progress(i, t, st, zstreak)
             _note_progress(j, t, st, zstreak)
             _advance(st, acc, omg, alpha, i, t, grav_on, rotation)
@@ -1479,7 +1489,8 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
             cell[i, k] = c
             remove(i, old, head, nxt, prv)
             insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
-            _prefetch_cells(i, cell, ncell, head)
+            if large:
+                _prefetch_cells(i, cell, ncell, head)
             _repredict_later(isc, i)  # into I_PEND_A: the top of the loop emptied both slots
             isc[I_PEND_LAYER] = code  # look at the new layer of neighbours only
             counts[EV_CELL] += 1

@@ -167,7 +167,7 @@ def _aligned_rows(n: int, width: int) -> np.ndarray:
     return buf[off:off + n * width].reshape(n, width)
 
 
-#: Each sphere's bookkeeping in one record of two cache lines (from PACKED_FROM spheres on),
+#: Each sphere's bookkeeping in one record of two cache lines (from LARGE_FROM spheres on),
 #: so that an event on a sphere fetches it in one go instead of one line from each of a dozen
 #: arrays (at N = 10⁶ these arrays do not fit the cache and every separate array costs a miss).
 #: The loop sees each field as an array of its own (a strided view), so its code is the same as
@@ -190,11 +190,13 @@ SPHERE_RECORD = np.dtype({
 FIELD_MIN = 2
 
 
-#: Spheres from which their fields are packed in records (SPHERE_RECORD). Below, each field is
-#: an array of its own: everything then fits the cache, and the packed fields (strided arrays
-#: for the compiled code) would save no misses. The compiled loop has a version for each
-#: layout (a second compile for the first scene of 2¹⁶ spheres or more).
-PACKED_FROM = 1 << 16
+#: Spheres from which a scene is run as a large system: the per-sphere fields packed in records
+#: (SPHERE_RECORD), an event calendar with time buckets (hsgran.events.calendar) and prefetch
+#: hints in the loop. Below, everything fits the cache: each field is an array of its own, every
+#: event stays in one heap, and there are no hints, all of which would only cost time there
+#: (measured with tools/bench_engine.py). The compiled loop has a version for each kind (a
+#: second compile for the first large scene).
+LARGE_FROM = 1 << 16
 
 
 def _sphere_fields(n: int, packed: bool) -> dict[str, np.ndarray]:
@@ -220,13 +222,13 @@ class Simulation:
         log_events: Record every collision (see :class:`EventBlock`).
         frame_buffer: Frames buffered between observer calls (default from
             :data:`FRAME_BUFFER_BYTES`).
-        calendar_buckets: Whether the event calendar uses time buckets (default: from
-            ``hsgran.events.calendar.BUCKETS_FROM`` spheres on). The events and their order are
-            the same either way; only the speed differs (for tests and benchmarks).
+        large: Run as a large system (see :data:`LARGE_FROM`; default: from that many
+            spheres on). The events and their order are the same either way; only the speed
+            differs (for tests and benchmarks).
     """
 
     def __init__(self, scene, *, brute_force: bool = False, log_events: bool = False,
-                 frame_buffer: int | None = None, calendar_buckets: bool | None = None):
+                 frame_buffer: int | None = None, large: bool | None = None):
         self.scene = scene
         eff = scene.effects
         n = scene.n
@@ -251,10 +253,12 @@ class Simulation:
         self.radius[:] = scene.radius
         self.omg = (np.ascontiguousarray(scene.angular_velocity, dtype=np.float64).copy()
                     if self.rotation else np.zeros((1, 3)))
-        # one record per sphere (SPHERE_RECORD, PACKED_FROM), and one more for the frame tick's
-        # event (entry n); the per-sphere fields are m long (FIELD_MIN)
+        # one record per sphere (SPHERE_RECORD, packed if large), and one more for the frame
+        # tick's event (entry n); the per-sphere fields are m long (FIELD_MIN)
+        if large is None:
+            large = n >= LARGE_FROM
         m = max(n, FIELD_MIN)
-        rec = _sphere_fields(m + 1, n >= PACKED_FROM)
+        rec = _sphere_fields(m + 1, large)
         self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)
         self.inv_m = rec["inv_m"][:n]
         self.inv_m[:] = 1.0 / self.mass
@@ -328,7 +332,7 @@ class Simulation:
         self.ev_partner[:] = -1
         self.ev_pcount = rec["ev_pcount"][:n + 1]
         self.calendar = new_calendar(n + 1, rec["where"][:n + 1], rec["qnext"][:n + 1],
-                                     rec["qprev"][:n + 1], calendar_buckets)
+                                     rec["qprev"][:n + 1], buckets=large)
         self.fsc = np.zeros(ev.F_SIZE)
         self.fsc[ev.F_FRAME_DT] = scene.frame_interval
         self.fsc[ev.F_LANDING_SPEED] = scene.effective_landing_speed

@@ -152,21 +152,21 @@ SMALL_POUR = Path(__file__).resolve().parents[1] / "tools" / "scenes" / "small_p
     pytest.param(SMALL_POUR, 30_000, marks=pytest.mark.skipif(
         numba.config.DISABLE_JIT, reason="too slow without the compiler")),
 ], ids=["elastic_gas", "small_pour"])
-def test_calendar_with_and_without_buckets_runs_the_same_events(scene, collisions):
-    """Time buckets change where the calendar keeps an event, never which event comes next:
-    the runs are identical to the bit, also across a checkpoint taken and restored with
-    buckets."""
+def test_large_system_layout_runs_the_same_events(scene, collisions):
+    """The layout for large systems (per-sphere records, a calendar with time buckets, prefetch
+    hints; engine.LARGE_FROM) changes where the data lie, never which event comes next: the
+    runs are identical to the bit, also across a checkpoint taken and restored in it."""
     if isinstance(scene, Path):
         scene = load_scene(scene)
     runs = []
-    for buckets in (False, True):
+    for large in (False, True):
         keep = Keep()
-        sim = Simulation(scene, log_events=True, calendar_buckets=buckets)
+        sim = Simulation(scene, log_events=True, large=large)
         sim.run(max_collisions=collisions // 2, observers=[keep])
-        if buckets:
+        if large:
             # continue in a fresh simulation from a checkpoint (the calendar is rebuilt)
             state = sim.checkpoint()
-            sim = Simulation(scene, log_events=True, calendar_buckets=True)
+            sim = Simulation(scene, log_events=True, large=True)
             sim.restore(state)
         sim.run(max_collisions=collisions - collisions // 2, observers=[keep])
         assert sim.collisions > 0

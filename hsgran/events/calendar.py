@@ -26,7 +26,10 @@ bucket width is chosen so that about :data:`BUCKET_TARGET` entries pass through 
 from the spread of the keys at the start and then from the count of each revolution.
 
 Below :data:`BUCKETS_FROM` entries there are no buckets (``nb`` = 0): every entry stays in the
-heap, which then fits the cache.
+heap, which then fits the cache. Whether there are buckets is a constant of the calendar's tuple
+type (:func:`has_buckets`), so the compiler drops the bucket code from a loop compiled for a
+calendar without them: tested at run time instead, its mere presence made the event loop ~15 %
+slower at N = 10³ (measured with tools/bench_engine.py).
 
 ``where[e]`` says where entry e is: its heap position (≥ 0), :data:`IN_OVERFLOW`, or
 ``IN_BUCKET0 − slot`` in the list of bucket ``slot``.
@@ -63,6 +66,10 @@ REBASE_BUCKETS = 2**40
 IN_OVERFLOW = -1  #: ``where`` of an entry in the overflow list
 IN_BUCKET0 = -2  #: ``where`` of an entry in the list of bucket 0 (bucket k: IN_BUCKET0 − k)
 
+#: Length of the calendar's tuple without buckets; with buckets it has one more element, an
+#: empty array that marks the kind in the type (see :func:`has_buckets`).
+HEAP_ONLY = 9
+
 # integer state qi[Q_*]
 Q_SIZE = 0  #: entries in the heap
 Q_CUR = 1  #: the current bucket (absolute number from the base)
@@ -80,7 +87,8 @@ F_LEN = 2
 def new_calendar(n: int, where: np.ndarray | None = None, qnext: np.ndarray | None = None,
                  qprev: np.ndarray | None = None, buckets: bool | None = None):
     """The arrays of a calendar of ``n`` entries, as the tuple
-    ``(heap, where, key_t, key_s, bhead, qnext, qprev, qi, qf)``.
+    ``(heap, where, key_t, key_s, bhead, qnext, qprev, qi, qf)``, followed with buckets by an
+    empty marker array (:func:`has_buckets`); without them, ``bhead`` has one unused entry.
 
     ``where`` (int64), ``qnext`` and ``qprev`` (int32) may be given, e.g. as fields of per-entry
     records; the rest is made. ``buckets``: use time buckets, or keep every entry in the heap
@@ -99,8 +107,16 @@ def new_calendar(n: int, where: np.ndarray | None = None, qnext: np.ndarray | No
     qi[Q_NB] = nb
     qf = np.zeros(F_LEN)
     qf[F_INV_W] = 1.0
-    return (heap, where, key_t, key_s, np.full(max(nb, 1), -1, dtype=np.int64), qnext, qprev, qi,
-            qf)
+    cal = (heap, where, key_t, key_s, np.full(max(nb, 1), -1, dtype=np.int64), qnext, qprev, qi,
+           qf)
+    return cal + (np.zeros(0, dtype=np.int8),) if buckets else cal
+
+
+@njit(inline="always")
+def has_buckets(cal):
+    """Whether the calendar has time buckets: a constant of its type (its length), so that
+    compiled code for a calendar without buckets holds none of theirs."""
+    return len(cal) > HEAP_ONLY
 
 
 @njit(inline="always")
@@ -135,11 +151,11 @@ def _unlink(e, cal):
 @njit(inline="always")
 def _place(e, t, s, cal):
     """Put e (in no structure) with key (t, s) where its bucket says."""
-    heap, where, key_t, key_s, bhead, qnext, qprev, qi, qf = cal
+    heap, where, key_t, key_s, bhead, qnext, qprev, qi, qf = cal[:HEAP_ONLY]
     x = (t - qf[F_BASE]) * qf[F_INV_W]
     cur = qi[Q_CUR]
     nb = qi[Q_NB]
-    if nb == 0 or x < cur + 1:  # no buckets, or B(t) ≤ cur
+    if not has_buckets(cal) or x < cur + 1:  # no buckets, or B(t) ≤ cur
         qi[Q_SIZE] = heap_push(heap, where, key_t, key_s, qi[Q_SIZE], e, t, s)
         qi[Q_PASSED] += 1
     elif x < cur + nb:  # within the next nb − 1 buckets (inf and NaN are not)
@@ -159,7 +175,7 @@ def calendar_update(cal, key_time, key_seq, e):
     t = key_time[e]
     s = key_seq[e]
     if where[e] >= 0:
-        if qi[Q_NB] == 0 or (t - qf[F_BASE]) * qf[F_INV_W] < qi[Q_CUR] + 1:
+        if not has_buckets(cal) or (t - qf[F_BASE]) * qf[F_INV_W] < qi[Q_CUR] + 1:
             heap_change(heap, where, key_t, key_s, qi[Q_SIZE], e, t, s)
             return
         qi[Q_SIZE] = heap_remove(heap, where, key_t, key_s, qi[Q_SIZE], e)
@@ -173,8 +189,8 @@ def calendar_prefetch(cal, key_time, e):
     """Ask for what :func:`calendar_update` of entry e will touch: the list head of its new
     bucket and its neighbours in the list it is in (a hint only)."""
     where, bhead, qnext, qprev, qi, qf = cal[1], cal[4], cal[5], cal[6], cal[7], cal[8]
-    if qi[Q_NB] == 0:
-        return  # no buckets: every entry is in the heap, which is in the cache
+    if not has_buckets(cal):
+        return  # every entry is in the heap, which is in the cache
     if where[e] < 0:
         if qprev[e] >= 0:
             prefetch(qnext, qprev[e])
@@ -208,7 +224,7 @@ def calendar_build(cal, key_time, key_seq, inv_w):
     choose = inv_w <= 0.0
     if choose:
         inv_w = 1.0  # (without buckets it is never used, but keeps (inf − base) · w⁻¹ a number)
-    if choose and qi[Q_NB] > 0:
+    if choose and has_buckets(cal):
         gaps = np.empty(n)
         m = 0
         for e in range(n):
@@ -279,9 +295,9 @@ def _prefetch_ahead(slot, cal, key_time):
 @njit(inline="always")
 def calendar_top(cal, key_time, key_seq):
     """The entry with the earliest key and its time [s] (−1 and inf if every key is inf)."""
-    heap, where, key_t, key_s, bhead, qnext, _, qi, qf = cal
+    heap, where, key_t, key_s, bhead, qnext, _, qi, qf = cal[:HEAP_ONLY]
     while qi[Q_SIZE] == 0:
-        if qi[Q_NB] == 0:
+        if not has_buckets(cal):
             return -1, math.inf  # no entries at all
         if qi[Q_LISTED] == 0:
             # nothing in the next nb − 1 buckets: start again from the earliest key, if any

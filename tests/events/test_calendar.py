@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hsgran.events.calendar import (
+    HEAP_ONLY,
     IN_OVERFLOW,
     Q_LISTED,
     Q_SIZE,
@@ -27,7 +28,7 @@ def earliest(t, seq):
 
 def check_structure(cal, n):
     """Every entry is in exactly one place, and the counts agree."""
-    heap, where, _, _, bhead, qnext, _, qi, _ = cal
+    heap, where, _, _, bhead, qnext, _, qi, _ = cal[:HEAP_ONLY]
     size = qi[Q_SIZE]
     assert all(where[heap[p]] == p for p in range(size))
     listed = 0
