@@ -716,6 +716,42 @@ def cmd_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_compile_parser(sub) -> None:
+    from hsgran.precompile import VERSIONS
+
+    p = sub.add_parser(
+        "compile", help="compile the event loop ahead of the first run (setup does this)",
+        description="Compile the versions of the compiled event loop (with and without "
+                    "gravity, each for ordinary and for large systems) into numba's on-disk "
+                    "cache, side by side in separate processes. Otherwise the first run that "
+                    "needs a version compiles it, which takes one to two minutes. The cache "
+                    "is kept per version of hsgran's sources (under ~/.cache/hsgran, or "
+                    "NUMBA_CACHE_DIR).")
+    p.add_argument("versions", nargs="*", metavar="VERSION",
+                   help=f"versions to compile: {', '.join(VERSIONS)} (default: all)")
+    p.add_argument("--jobs", metavar="N", help="parallel processes (default: one per core, "
+                                               "at most one per version)")
+
+
+def cmd_compile(args: argparse.Namespace) -> int:
+    """``hsgran compile``: fill the on-disk cache with every version of the event loop."""
+    from hsgran.precompile import VERSIONS, default_jobs, main_report
+
+    for name in args.versions:
+        if name not in VERSIONS:
+            raise InputError(f"unknown version {name!r}{did_you_mean(name, VERSIONS)} "
+                             f"(one of: {', '.join(VERSIONS)})")
+    jobs = default_jobs()
+    if args.jobs is not None:
+        try:
+            jobs = int(args.jobs)
+        except ValueError:
+            jobs = 0
+        if jobs < 1:
+            raise InputError(f"--jobs must be a whole number >= 1, not {args.jobs!r}")
+    return main_report(args.versions or None, jobs)
+
+
 # ---- main --------------------------------------------------------------------------------
 
 #: Handler of each subcommand: takes the parsed arguments, returns the exit code.
@@ -726,6 +762,7 @@ HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "plot": cmd_plot,
     "validate": cmd_validate,
     "sweep": cmd_sweep,
+    "compile": cmd_compile,
 }
 
 
@@ -743,6 +780,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_plot_parser(sub)
     add_validate_parser(sub)
     add_sweep_parser(sub)
+    _add_compile_parser(sub)
     parser.commands = dict(sub.choices)
     return parser
 

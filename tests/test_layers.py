@@ -37,6 +37,7 @@ LAYERS = {
     "validate": 6,
     "validation.": 6,
     "cli": 6,
+    "precompile": 6,
     "api": 6,
     "sweep.": 6,
     "__main__": 6,

@@ -32,4 +32,7 @@ if [ ! -x .venv/bin/python ]; then
 fi
 .venv/bin/python -m pip install --quiet --upgrade pip
 .venv/bin/python -m pip install --quiet -e '.[dev,render]'
+# Compile the event loop now, its versions side by side (a few minutes; seconds when the cache
+# has them already), rather than in the first run that needs each one.
+.venv/bin/hsgran compile
 echo "hsgran is set up in .venv (try: .venv/bin/hsgran --help)"

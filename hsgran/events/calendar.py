@@ -110,7 +110,7 @@ def new_calendar(n: int, where: np.ndarray | None = None, qnext: np.ndarray | No
     qf[F_INV_W] = 1.0
     cal = (heap, where, key_t, key_s, np.full(max(nb, 1), -1, dtype=np.int64), qnext, qprev, qi,
            qf)
-    return cal + (np.zeros(0, dtype=np.int8),) if buckets else cal
+    return (*cal, np.zeros(0, dtype=np.int8)) if buckets else cal
 
 
 @njit(inline="always")
