@@ -13,7 +13,6 @@ cache entries are the ones a real run looks up.
 from __future__ import annotations
 
 import os
-import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from multiprocessing import get_context
@@ -148,8 +147,11 @@ def main_report(names, jobs: int) -> int:
     if jit_disabled():
         print("nothing to compile: NUMBA_DISABLE_JIT is set")
         return 0
+    todo = list(VERSIONS) if names is None else list(names)
+    print(f"compiling the event loop ({', '.join(todo)}) with {jobs} job(s): one to two "
+          f"minutes per version not yet in the cache", flush=True)
     t0 = time.perf_counter()
-    done = compile_all(names, jobs, report=lambda line: print(line, flush=True))
+    done = compile_all(todo, jobs, report=lambda line: print(line, flush=True))
     print(f"compiled {len(done)} version(s) of the event loop in "
-          f"{time.perf_counter() - t0:.1f} s wall with {jobs} job(s)", file=sys.stdout)
+          f"{time.perf_counter() - t0:.1f} s wall with {jobs} job(s)")
     return 0

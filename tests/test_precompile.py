@@ -46,3 +46,14 @@ def test_without_jit_there_is_nothing_to_compile(capsys, monkeypatch):
     monkeypatch.setattr(numba.config, "DISABLE_JIT", True)
     assert main(["compile"]) == 0
     assert "nothing to compile" in capsys.readouterr().out
+
+
+@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="needs the compiled kernels")
+def test_the_command_says_what_it_compiles_then_each_time_and_the_total(capsys):
+    assert main(["compile", "free", "--jobs", "1"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 3
+    assert lines[0].startswith("compiling the event loop (free) with 1 job(s)")
+    assert lines[1].startswith("free: ")
+    assert lines[1].endswith(" s")
+    assert lines[2].startswith("compiled 1 version(s) of the event loop in ")
