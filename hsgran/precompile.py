@@ -17,7 +17,8 @@ import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from multiprocessing import get_context
 
-#: A steel sphere bouncing on a steel floor, with every effect (the loop with gravity).
+#: Two spheres of the built-in steel bouncing on a steel floor, with every effect (the loop
+#: with gravity).
 _GRAVITY_SCENE = """
 [scene]
 name = "compile: loop with gravity"
@@ -26,11 +27,6 @@ gravity = [0.0, 0.0, -9.81]
 effects = ["gravity", "rotation", "friction", "plasticity"]
 [output]
 frame_interval = 0.005
-[materials.steel]
-density = 7800.0
-youngs_modulus = 200e9
-poisson_ratio = 0.30
-yield_stress = 1.0e9
 [[contacts]]
 between = ["steel", "steel"]
 sliding_friction = 0.3
@@ -51,7 +47,8 @@ position = [0.003, 0.0, 0.0012]
 velocity = [-0.1, 0.0, -0.2]
 """
 
-#: Two steel spheres meeting in a periodic box, no effects (the loop without gravity).
+#: Two spheres of the built-in steel meeting in a periodic box, no effects (the loop without
+#: gravity).
 _FREE_SCENE = """
 [scene]
 name = "compile: loop without gravity"
@@ -60,11 +57,6 @@ effects = []
 periodic = [true, true, true]
 [output]
 frame_interval = 0.005
-[materials.steel]
-density = 7800.0
-youngs_modulus = 200e9
-poisson_ratio = 0.30
-yield_stress = 1.0e9
 [[walls]]
 kind = "box"
 lower = [0.0, 0.0, 0.0]
