@@ -17,9 +17,10 @@ from pathlib import Path
 import numba
 from numba import njit as _njit
 
-#: Compile options shared by every kernel: on-disk cache (a cold compile costs seconds), and
-#: no fast-math so that results are IEEE-reproducible.
-JIT_OPTIONS = {"cache": True, "nogil": True}
+#: Compile options shared by every kernel: on-disk cache (a cold compile costs seconds), no
+#: fast-math so that results are IEEE-reproducible, and no reference counting of arrays
+#: (``_nrt``: numba's runtime; see :func:`njit`).
+JIT_OPTIONS = {"cache": True, "nogil": True, "_nrt": False}
 
 
 def _source_digest() -> str:
@@ -42,9 +43,26 @@ def _configure_cache() -> None:
 _configure_cache()
 
 
-def njit(func=None, **options):
-    """``numba.njit`` with hsgran's defaults (see :data:`JIT_OPTIONS`)."""
+def njit(func=None, *, allocates=False, **options):
+    """``numba.njit`` with hsgran's defaults (see :data:`JIT_OPTIONS`).
+
+    Kernels are compiled without numba's reference counting of arrays. Every array a kernel
+    touches belongs to a Python caller that holds it for the whole call, so the counting is
+    pure cost: numba increments and decrements (atomically, out of line) the count of every
+    array passed to an inlined helper, each array of a tuple argument included, and its
+    pruning pass leaves most of these in a loop. In the event loop they took a third of the
+    time (perf samples of the N = 10⁴ elastic gas: 32 % in NRT_incref/NRT_decref); without
+    them the gas runs 1.5x faster (tools/bench_engine.py).
+
+    The price: such a kernel cannot create arrays, nor return an array other than one of its
+    arguments (a counting caller would release it once too often); numba refuses to compile
+    either. A kernel that creates arrays passes ``allocates=True`` and keeps the counting.
+    tests/test_jit.py checks that runs leave the reference count of every array of the engine
+    as they found it and free every array the allocating kernels create.
+    """
     opts = {**JIT_OPTIONS, **options}
+    if allocates:
+        opts["_nrt"] = True
     if func is None:
         return lambda f: _njit(**opts)(f)
     return _njit(**opts)(func)

@@ -904,7 +904,8 @@ def _tc_row(row, t, t1, t2, fsc, row_tc):
     fixed-restitution bypass; the tangential model is unchanged)."""
     tc = fsc[F_TC_TIME]
     if tc > 0.0 and (t - t1 < tc or t - t2 < tc):
-        row_tc[:] = row
+        for k in range(row.shape[0]):  # (a slice copy would need numba's allocator)
+            row_tc[k] = row[k]
         row_tc[P_E_FIXED] = TC_RESTITUTION
         return row_tc, True
     return row, False

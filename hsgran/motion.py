@@ -241,7 +241,7 @@ def _dpoly_root(c4, c3, c2, c1, lo, hi):
     return 0.5 * (lo + hi)
 
 
-@njit
+@njit(allocates=True)
 def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon, v_sum=0.0,
                              x_sum=0.0):
     """Time until two spheres with different constant accelerations touch (a quartic).

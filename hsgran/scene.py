@@ -1129,7 +1129,7 @@ def _grid_insert_all(grid_pos, count, head, nxt, dom_lo, cell, ncell, period):
         head[c] = p
 
 
-@njit
+@njit(allocates=True)
 def _rsa_kernel(u, order, radii, lower, upper, plane_point, plane_normal, grid_pos, grid_rad,
                 head, nxt, dom_lo, cell, ncell, period, positions, state):
     """Consume uniform triples ``u`` as candidate centres; returns how many were used.

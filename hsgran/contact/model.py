@@ -335,7 +335,7 @@ def make_batch_resolver(effects: Effects, diagnostics: bool = False, switched: b
     if key not in _BATCHES:
         PL, FR, RO, AD, ROT, DG = key
 
-        @njit
+        @njit(allocates=True)
         def batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, curv,
                   rows, pair_index, recs):
             return _resolve_batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2,
@@ -345,7 +345,7 @@ def make_batch_resolver(effects: Effects, diagnostics: bool = False, switched: b
     return _BATCHES[key]
 
 
-@njit
+@njit(allocates=True)
 def _batch_switched(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2,
                     curv, rows, pair_index, recs, plasticity, friction, rolling, adhesion,
                     rotation, diagnostics):

@@ -203,7 +203,7 @@ def calendar_prefetch(cal, key_time, e):
         prefetch(bhead, np.int64(x) & (qi[Q_NB] - 1))
 
 
-@njit
+@njit(allocates=True)
 def calendar_build(cal, key_time, key_seq, inv_w):
     """(Re)build the calendar from every entry's key, with bucket 0 starting at the earliest
     finite key. ``inv_w`` [1/s]: 1 / bucket width, or 0 to choose it from the keys: about
