@@ -321,12 +321,16 @@ def test_pour_of_2000_spheres_settles_to_rest_without_overlap():
 
 # -- small pours: a sphere wedged between a side wall and a sleeper above it -----------------
 
-#: Seeds of tools/scenes/small_pour.toml that reached the collapse guard (at 0.205 s and
-#: 0.172 s) before a sphere in a zero-time sequence against immovable bodies was stopped
-#: (_loop._wedge_stop): in both, a sphere in flight between a side wall and a sleeper leaning
-#: over it, the two sending it back and forth with impulses shrinking by ~0.9 a collision at
-#: one instant.
-WEDGED_SEEDS = (1, 3)
+#: Seeds of tools/scenes/small_pour.toml in which the wedge rule (_loop._wedge_stop) stops a
+#: sphere. Seeds 1 and 3 reached the collapse guard (at 0.205 s and 0.172 s) before the rule
+#: existed, on the machine where it was written: in both, a sphere in flight between a side
+#: wall and a sleeper leaning over it, the two sending it back and forth with impulses
+#: shrinking by ~0.9 a collision at one instant. Which pours wedge a sphere depends on the
+#: last bits of the arithmetic, which differ between CPUs (library routines picked by CPU
+#: features): on the AVX-512 machine of 2026-11-25 seeds 1 and 3 settle without a wedge and
+#: seeds 2, 13 and 16 of 1-16 have one. So the seeds of both machines are run, and at least
+#: one wedge is required among them.
+WEDGED_SEEDS = (1, 2, 3)
 
 
 #: 200 spheres at e = 0.5 in a 15 mm box, to 1 s (also the base of tools/settle_variants.py).
@@ -338,15 +342,25 @@ def small_pour(seed):
     return load_scene(SMALL_POUR, overrides={"scene.seed": seed})
 
 
+def run_logged(scene):
+    """Run a scene to its end with the event log on: (summary, the log as one EventBlock)."""
+    sim = Simulation(scene, log_events=True)
+    blocks = []
+    summary = sim.run(observers=[SimpleNamespace(on_events=blocks.append)])
+    return sim, summary, EventBlock.concatenate(blocks)
+
+
 @pytest.mark.skipif(numba.config.DISABLE_JIT, reason="a pour takes ~10 s compiled, hours "
                                                        "in pure Python")
-@pytest.mark.parametrize("seed", WEDGED_SEEDS)
-def test_small_pour_with_a_sphere_wedged_under_a_sleeper_settles(seed):
-    scene = small_pour(seed)
-    sim = Simulation(scene)
-    summary = sim.run()
-    assert summary.events["wedge"] >= 1
-    assert_at_rest_in_the_box_without_overlap(scene, sim)
+def test_small_pours_with_spheres_wedged_under_sleepers_settle():
+    wedges = 0
+    for seed in WEDGED_SEEDS:
+        scene = small_pour(seed)
+        sim, summary, ev = run_logged(scene)
+        assert (ev.kind == EV_WEDGE).sum() == summary.events["wedge"], seed  # all logged
+        wedges += summary.events["wedge"]
+        assert_at_rest_in_the_box_without_overlap(scene, sim)
+    assert wedges >= 1
 
 
 #: Variants of tools/scenes/small_pour.toml (tools/settle_variants.py) that reached the
@@ -398,9 +412,12 @@ def test_pour_variants_with_wedged_spheres_settle(over):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("seed", range(1, 17))
-def test_small_pours_settle_to_rest_without_overlap(seed):
-    scene = small_pour(seed)
-    sim = Simulation(scene)
-    sim.run()
-    assert_at_rest_in_the_box_without_overlap(scene, sim)
+def test_small_pours_settle_to_rest_without_overlap():
+    wedges = 0
+    for seed in range(1, 17):
+        scene = small_pour(seed)
+        sim, summary, ev = run_logged(scene)
+        assert (ev.kind == EV_WEDGE).sum() == summary.events["wedge"], seed
+        wedges += summary.events["wedge"]
+        assert_at_rest_in_the_box_without_overlap(scene, sim)
+    assert wedges >= 1  # the rule is needed in some of them (see WEDGED_SEEDS)

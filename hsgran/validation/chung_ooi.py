@@ -783,7 +783,10 @@ CO6_RADIUS, CO6_NORMAL_SPEED, CO6_MU, CO6_E_N = 0.1, 0.2, 0.4, 0.5
 CO6_SERIES = ("DEM_Al_alloy", "DEM_nylon")
 #: 3.5 μ (1 + e_n) = 2.1: sliding/rolling boundary in tan(incidence) (MODEL.md §4.3).
 CO6_T_CRIT = 3.5 * CO6_MU * (1.0 + CO6_E_N)
-CO6_GRID = tuple(float(t) for t in np.tan(np.radians(np.arange(1.0, 89.0, 2.0))))
+#: tan(incidence) at 1°, 3°, ..., 87°. Through math.tan, not numpy's: numpy picks its
+#: vector kernels by CPU at run time and its tan(3°) is one ulp lower on a CPU with
+#: AVX-512, which changed the generated scene files from machine to machine.
+CO6_GRID = tuple(math.tan(math.radians(a)) for a in range(1, 89, 2))
 #: quantity → (label, abscissa from the contact-point slip u0, u0 from the abscissa, sliding?)
 CO6_QUANTITIES = {
     "beta_vs_x": ("β = −u′/u0 against x = 3.5 μ (1 + e_n) V_n/u0",

@@ -239,6 +239,18 @@ def extent(*arrays) -> float:
     return float(values.max() - values.min())
 
 
+def geometric_grid(lo: float, hi: float, n: int) -> list[float]:
+    """``n`` ≥ 2 points from ``lo`` to ``hi`` (both > 0) spaced evenly in log10, like
+    ``numpy.geomspace`` but through Python's math: numpy picks its vector kernels of log and
+    power by CPU at run time and their last bit differs between CPUs with and without AVX-512,
+    which changed the scene files generated from these grids from machine to machine."""
+    a, b = math.log10(lo), math.log10(hi)
+    step = (b - a) / (n - 1)
+    grid = [math.pow(10.0, k * step + a) for k in range(n)]
+    grid[0], grid[-1] = lo, hi
+    return grid
+
+
 def central_slope(func: Callable[[float], float], x: float, h: float) -> float:
     """Central difference (f(x + h) − f(x − h)) / 2h of a closed-form curve."""
     return (func(x + h) - func(x - h)) / (2.0 * h)

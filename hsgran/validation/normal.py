@@ -29,6 +29,7 @@ from hsgran.validation.core import (
     SceneText,
     ValidationError,
     closed_form_tolerance,
+    geometric_grid,
     half_unit,
     material_of,
     new_figure,
@@ -91,7 +92,7 @@ def _digit(text: str) -> float:
 
 def _speeds(sweep, extra) -> list[float]:
     lo, hi, n = sweep
-    grid = [float(v) for v in np.geomspace(lo, hi, n)]
+    grid = geometric_grid(lo, hi, n)
     return sorted({round(v, 12) for v in grid} | {float(v) for v in extra})
 
 

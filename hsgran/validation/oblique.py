@@ -49,6 +49,7 @@ from hsgran.validation.core import (
     ValidationError,
     closed_form_tolerance,
     finish_figure,
+    geometric_grid,
     long_series,
     new_figure,
     roundoff_tolerance,
@@ -304,7 +305,7 @@ PP_R1, PP_R2 = 0.1, 0.5  #: [m] sphere 1 (spinning, moving) and sphere 2 (at res
 PP_NORMAL_SPEED, PP_MU, PP_E_N = 0.2, 0.4, 0.5
 #: Abscissae x = 3.5 μ (1 + e_n) V_n/u0 of the sweep (x < 1: sliding, x ≥ 1: rolling); an even
 #: count of log-spaced points keeps x = 1, where round-off picks the regime, out of the sweep.
-PP_X = tuple(float(x) for x in np.geomspace(0.1, 10.0, 16))
+PP_X = tuple(geometric_grid(0.1, 10.0, 16))
 #: Families with the same relative contact-point slip u0 along +x: name → (V1_t/u0, R1 ω1/u0,
 #: R2 ω2/u0), spins about +y.
 PP_FAMILIES = {
