@@ -224,6 +224,17 @@ def _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, lo, hi):
     return hi
 
 
+@njit(inline="always")
+def _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, b):
+    """(True, root) if f falls through zero on [a, b], a piece where it is monotone; else
+    (False, inf)."""
+    fa, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a)
+    fb, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, b)
+    if fa > 0.0 and fb <= 0.0:
+        return True, _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, b)
+    return False, NEVER
+
+
 @njit
 def _dpoly_root(c4, c3, c2, c1, lo, hi):
     """A root of f' in [lo, hi] where f' changes sign (bisection; f' is monotone there)."""
@@ -241,7 +252,7 @@ def _dpoly_root(c4, c3, c2, c1, lo, hi):
     return 0.5 * (lo + hi)
 
 
-@njit(allocates=True)
+@njit
 def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon, v_sum=0.0,
                              x_sum=0.0):
     """Time until two spheres with different constant accelerations touch (a quartic).
@@ -289,49 +300,47 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
         noise = 2.0 * approach_noise(sigma, v_sum, x_sum)
         if c1 < -noise or (c2 < 0.0 and c1 <= noise):
             return 0.0
-    # critical points of f' (zeros of f'' = 12 c4 τ² + 6 c3 τ + 2 c2) split [0, h] into pieces
-    # on which f' is monotone; the zeros of f' found there split it into pieces where f is
-    pts = np.empty(8)
-    m = 0
-    pts[m] = 0.0
-    m += 1
+    # critical points of f' (zeros of f'' = 12 c4 τ² + 6 c3 τ + 2 c2) split [0, h] into up to
+    # three pieces on which f' is monotone; the zeros of f' found there split it into pieces
+    # where f is, which are searched in order as they are found (scalars, not arrays: this runs
+    # for every flying sphere near a resting one, and kernels do not allocate, see hsgran._jit)
     qa = 12.0 * c4
     qb = 6.0 * c3
     qc = 2.0 * c2
+    p1 = p2 = h  # inner bounds of the pieces of f' (q1 < q2 as qa > 0), h where absent
+    m = 1  # pieces of f'
     disc = qb * qb - 4.0 * qa * qc
     if disc > 0.0:
         sq = math.sqrt(disc)
         q1 = (-qb - sq) / (2.0 * qa)
         q2 = (-qb + sq) / (2.0 * qa)
         if 0.0 < q1 < h:
-            pts[m] = q1
+            p1 = q1
             m += 1
         if 0.0 < q2 < h:
-            pts[m] = q2
+            if m == 1:
+                p1 = q2
+            else:
+                p2 = q2
             m += 1
-    pts[m] = h
-    m += 1
-    crit = np.empty(8)
-    nc = 0
-    crit[nc] = 0.0
-    nc += 1
-    for k in range(m - 1):
-        a = pts[k]
-        b = pts[k + 1]
-        fa = _dpoly(c4, c3, c2, c1, a)
-        fb = _dpoly(c4, c3, c2, c1, b)
-        if (fa > 0.0) != (fb > 0.0) and fa != 0.0 and fb != 0.0:
-            crit[nc] = _dpoly_root(c4, c3, c2, c1, a, b)
-            nc += 1
-    crit[nc] = h
-    nc += 1
-    for k in range(nc - 1):
-        a = crit[k]
-        b = crit[k + 1]
-        if b <= a or (touching and k == 0):
-            continue
-        fa, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a)
-        fb, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, b)
-        if fa > 0.0 and fb <= 0.0:
-            return _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, b)
+    bounds = (0.0, p1, p2, h)
+    a = 0.0  # start of the current piece of f
+    first = True  # it is the piece from τ = 0
+    for k in range(m):
+        lo = bounds[k]
+        hi = bounds[k + 1]
+        flo = _dpoly(c4, c3, c2, c1, lo)
+        fhi = _dpoly(c4, c3, c2, c1, hi)
+        if (flo > 0.0) != (fhi > 0.0) and flo != 0.0 and fhi != 0.0:
+            b = _dpoly_root(c4, c3, c2, c1, lo, hi)
+            if b > a and not (touching and first):
+                found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, b)
+                if found:
+                    return tau
+            a = b
+            first = False
+    if h > a and not (touching and first):
+        found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, h)
+        if found:
+            return tau
     return NEVER
