@@ -2,13 +2,15 @@
 
 Usage:
     .venv/bin/python tools/profile_loop.py [--size 1e4] [--collisions 2e6] [--cache DIR]
+    .venv/bin/python tools/profile_loop.py --scene tools/scenes/pour.toml [--until 0.2]
 
 Runs the elastic gas of tools/bench_engine.py (N spheres, warmed up, then ``--collisions``
-collisions) under ``perf record`` (software clock, 4 kHz) and prints the share of the samples
-in each compiled function of the loop. perf cannot name numba's JIT code, so the child
-process writes where each function of the loop's compiled library was loaded (the names come
-from the object code in numba's cache, the addresses from its JIT engine) and the samples are
-assigned to those ranges here. Functions that numba inlines are part of ``_run_loop``.
+collisions), or a scene file, under ``perf record`` (software clock, 4 kHz) and prints the
+share of the samples in each compiled function of the loop. perf cannot name numba's JIT
+code, so the child process writes where each function of the loop's compiled library was
+loaded (the names come from the object code in numba's cache, the addresses from its JIT
+engine) and the samples are assigned to those ranges here. Functions that numba inlines are
+part of ``_run_loop``.
 
 The loop is compiled with ``NUMBA_ENABLE_PROFILING=1`` (debug information) into its own cache
 directory (``--cache``, default /tmp/hsgran-profile-cache; a cold compile takes a minute or
@@ -48,24 +50,32 @@ sys.path.insert(0, {tools!r})
 from bench_engine import lattice_gas
 from hsgran import _loop
 from hsgran.engine import Simulation
-n, collisions, out = int(sys.argv[1]), int(sys.argv[2]), sys.argv[3]
-sim = Simulation(lattice_gas(n))
-sim.run(until=1e6, max_collisions=3 * n // 2)
-loops = [cres for d in (_loop.run_loop_free,) for cres in d.overloads.values()]
-engine = loops[0].library._codegen._engine._ee
+from hsgran.scene import load_scene
+n, amount, out, scene = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], sys.argv[4]
+if scene:
+    sim = Simulation(load_scene(scene))
+    loop = _loop.run_loop_gravity if sim.scene.effects.gravity else _loop.run_loop_free
+else:
+    sim = Simulation(lattice_gas(n))
+    sim.run(until=1e6, max_collisions=3 * n // 2)
+    loop = _loop.run_loop_free
+engine = next(iter(loop.overloads.values())).library._codegen._engine._ee
 names = json.load(open(out))["names"]
 json.dump({{"addresses": {{nm: engine.get_function_address(nm) for nm in names}}}}, open(out, "w"))
-sim.run(until=1e6, max_collisions=collisions)
+if scene:
+    sim.run(until=amount)
+else:
+    sim.run(until=1e6, max_collisions=int(amount))
 """
 
 
-def _library_symbols(cache: Path) -> dict[str, tuple[int, int]]:
-    """{symbol: (offset, size)} of the functions in the cached object code of the elastic loop
-    (the largest cache entry of run_loop_free: the layout the gas uses at this size)."""
-    entries = sorted(cache.glob("hsgran_*/_loop.run_loop_free-*.nbc"),
-                     key=lambda p: -p.stat().st_size)
+def _library_symbols(cache: Path, loop: str) -> dict[str, tuple[int, int]]:
+    """{symbol: (offset, size)} of the functions in the cached object code of ``loop``
+    (``run_loop_free`` or ``run_loop_gravity``), merged over its cached versions (layouts);
+    the child reports where the version it loaded put them."""
+    entries = sorted(cache.glob(f"hsgran_*/_loop.{loop}-*.nbc"))
     if not entries:
-        raise SystemExit(f"no compiled loop in {cache}")
+        raise SystemExit(f"no compiled {loop} in {cache}")
     import numba  # noqa: F401  (the cache entries unpickle into numba objects)
 
     def elf(obj):
@@ -78,16 +88,17 @@ def _library_symbols(cache: Path) -> dict[str, tuple[int, int]]:
                     return found
         return None
 
-    blob = elf(pickle.loads(entries[0].read_bytes()))
-    with tempfile.NamedTemporaryFile(suffix=".o") as f:
-        f.write(blob)
-        f.flush()
-        nm = subprocess.run(["nm", "-S", f.name], capture_output=True, text=True, check=True)
     symbols = {}
-    for line in nm.stdout.splitlines():
-        parts = line.split()
-        if len(parts) == 4 and parts[2] in "tTwW":
-            symbols[parts[3]] = (int(parts[0], 16), int(parts[1], 16))
+    for entry in entries:
+        with tempfile.NamedTemporaryFile(suffix=".o") as f:
+            f.write(elf(pickle.loads(entry.read_bytes())))
+            f.flush()
+            nm = subprocess.run(["nm", "-S", f.name], capture_output=True, text=True,
+                                check=True)
+        for line in nm.stdout.splitlines():
+            parts = line.split()
+            if len(parts) == 4 and parts[2] in "tTwW":
+                symbols[parts[3]] = (int(parts[0], 16), int(parts[1], 16))
     return symbols
 
 
@@ -104,10 +115,11 @@ def _short(symbol: str) -> str:
     return ".".join(words) or symbol[:40]
 
 
-def _run_child(n: int, collisions: int, cache: Path, out: Path, perf_data: Path | None):
+def _run_child(n: int, amount: float, scene: str, cache: Path, out: Path,
+               perf_data: Path | None):
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "NUMBA_ENABLE_PROFILING": "1"}
     code = CHILD.format(tools=str(ROOT / "tools"))
-    cmd = [sys.executable, "-c", code, str(n), str(collisions), str(out)]
+    cmd = [sys.executable, "-c", code, str(n), repr(amount), str(out), scene]
     if perf_data is not None:
         cmd = ["perf", "record", "-q", "-k", "1", "-e", "cpu-clock", "-F", str(SAMPLE_HZ),
                "-o", str(perf_data), *cmd]
@@ -118,25 +130,38 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", type=float, default=1e4, help="spheres of the gas (default 1e4)")
     ap.add_argument("--collisions", type=float, default=2e6,
-                    help="collisions sampled after the warm-up (default 2e6)")
+                    help="collisions of the gas sampled after its warm-up (default 2e6)")
+    ap.add_argument("--scene", default="",
+                    help="profile this scene file instead of the gas (e.g. tools/scenes/pour.toml)")
+    ap.add_argument("--until", type=float, default=None,
+                    help="with --scene: simulated time to run to [s] (default: its duration)")
     ap.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
                     help=f"numba cache of the profiled build (default {DEFAULT_CACHE})")
     args = ap.parse_args(argv)
     if shutil.which("perf") is None:
         print("perf not found: apt-get install linux-perf", file=sys.stderr)
         return 2
-    n, collisions = round(args.size), round(args.collisions)
+    n = round(args.size)
+    scene = str(Path(args.scene).resolve()) if args.scene else ""
+    if scene:
+        from hsgran.scene import load_scene  # (a bad scene fails here, with its message)
+        sc = load_scene(scene)
+        loop = "run_loop_gravity" if sc.effects.gravity else "run_loop_free"
+        amount, first = (args.until or sc.duration), 1e-9
+        what = f"{args.scene} to t = {amount:g} s"
+    else:
+        loop, amount, first = "run_loop_free", float(round(args.collisions)), 1.0
+        what = f"elastic gas, N = {n:,}, warm-up and {round(args.collisions):,} collisions"
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "addresses.json"
         perf_data = Path(tmp) / "perf.data"
-        if not any(args.cache.glob("hsgran_*/_loop.run_loop_free-*.nbc")):
-            print(f"# compiling the loop with debug information into {args.cache} ...",
-                  flush=True)
-            out.write_text(json.dumps({"names": []}))
-            _run_child(n, 1, args.cache, out, None)
-        symbols = _library_symbols(args.cache)
+        print(f"# compiling (or loading) the loop with debug information in {args.cache}",
+              flush=True)
+        out.write_text(json.dumps({"names": []}))
+        _run_child(n, first, scene, args.cache, out, None)
+        symbols = _library_symbols(args.cache, loop)
         out.write_text(json.dumps({"names": sorted(symbols)}))
-        _run_child(n, collisions, args.cache, out, perf_data)
+        _run_child(n, amount, scene, args.cache, out, perf_data)
         addresses = json.loads(out.read_text())["addresses"]
         script = subprocess.run(["perf", "script", "-i", str(perf_data), "-F", "ip,dso"],
                                 capture_output=True, text=True, check=True).stdout
@@ -155,9 +180,8 @@ def main(argv=None) -> int:
         else:
             outside += 1  # start-up, scene building, Python, numpy, the kernel
     inside = sum(counts.values())
-    print(f"# elastic gas, N = {n:,}, warm-up and {collisions:,} collisions; {inside:,} samples "
-          f"in the loop's compiled code at {SAMPLE_HZ} Hz ({outside:,} elsewhere: start-up, "
-          "Python)")
+    print(f"# {what}; {inside:,} samples in the loop's compiled code at {SAMPLE_HZ} Hz "
+          f"({outside:,} elsewhere: start-up, Python)")
     print(f"{'share':>7}  function (share of the loop's samples)")
     listed = counts.most_common(TOP)
     for name, c in listed:
