@@ -342,25 +342,32 @@ def small_pour(seed):
     return load_scene(SMALL_POUR, overrides={"scene.seed": seed})
 
 
-def run_logged(scene):
-    """Run a scene to its end with the event log on: (summary, the log as one EventBlock)."""
+def run_logged(scene, **run_args):
+    """Run a scene with the event log on (``run_args`` go to Simulation.run): (the Simulation,
+    the run summary, the log as one EventBlock)."""
     sim = Simulation(scene, log_events=True)
     blocks = []
-    summary = sim.run(observers=[SimpleNamespace(on_events=blocks.append)])
+    summary = sim.run(observers=[SimpleNamespace(on_events=blocks.append)], **run_args)
     return sim, summary, EventBlock.concatenate(blocks)
 
 
-@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="a pour takes ~10 s compiled, hours "
-                                                       "in pure Python")
-def test_small_pours_with_spheres_wedged_under_sleepers_settle():
+def assert_small_pours_settle_with_a_wedge_stop(seeds):
+    """Each small pour of ``seeds`` settles without overlap with every wedge stop in its event
+    log, and the wedge rule stops a sphere in at least one of them (see WEDGED_SEEDS)."""
     wedges = 0
-    for seed in WEDGED_SEEDS:
+    for seed in seeds:
         scene = small_pour(seed)
         sim, summary, ev = run_logged(scene)
         assert (ev.kind == EV_WEDGE).sum() == summary.events["wedge"], seed  # all logged
         wedges += summary.events["wedge"]
         assert_at_rest_in_the_box_without_overlap(scene, sim)
     assert wedges >= 1
+
+
+@pytest.mark.skipif(numba.config.DISABLE_JIT, reason="a pour takes ~10 s compiled, hours "
+                                                       "in pure Python")
+def test_small_pours_with_spheres_wedged_under_sleepers_settle():
+    assert_small_pours_settle_with_a_wedge_stop(WEDGED_SEEDS)
 
 
 #: Variants of tools/scenes/small_pour.toml (tools/settle_variants.py) that reached the
@@ -395,15 +402,11 @@ VARIANT_MAX_COLLISIONS = 6_000_000
                          ids=["pocket_on_the_floor", "pocket_apart_by_rounding", "chain"])
 def test_pour_variants_with_wedged_spheres_settle(over):
     scene = load_scene(SMALL_POUR, overrides=over)
-    sim = Simulation(scene, log_events=True)
-    blocks = []
     # a collision budget (measured: at most 2e6 to 1 s), so that an endless loop fails the
     # test instead of hanging it
-    summary = sim.run(max_collisions=VARIANT_MAX_COLLISIONS,
-                      observers=[SimpleNamespace(on_events=blocks.append)])
+    sim, summary, ev = run_logged(scene, max_collisions=VARIANT_MAX_COLLISIONS)
     assert sim.time == scene.duration
     assert summary.events["wedge"] >= 1
-    ev = EventBlock.concatenate(blocks)
     stops = ev.kind == EV_WEDGE
     assert stops.sum() == summary.events["wedge"]  # each stop is in the event log
     if over is POCKET:
@@ -413,11 +416,4 @@ def test_pour_variants_with_wedged_spheres_settle(over):
 
 @pytest.mark.slow
 def test_small_pours_settle_to_rest_without_overlap():
-    wedges = 0
-    for seed in range(1, 17):
-        scene = small_pour(seed)
-        sim, summary, ev = run_logged(scene)
-        assert (ev.kind == EV_WEDGE).sum() == summary.events["wedge"], seed
-        wedges += summary.events["wedge"]
-        assert_at_rest_in_the_box_without_overlap(scene, sim)
-    assert wedges >= 1  # the rule is needed in some of them (see WEDGED_SEEDS)
+    assert_small_pours_settle_with_a_wedge_stop(range(1, 17))

@@ -71,8 +71,8 @@ else:
 """
 
 
-def _library_symbols(cache: Path, loop: str) -> dict[str, tuple[int, int]]:
-    """{symbol: (offset, size)} of the functions in the cached object code of ``loop``
+def _library_symbols(cache: Path, loop: str) -> dict[str, int]:
+    """{symbol: size [bytes]} of the functions in the cached object code of ``loop``
     (``run_loop_free`` or ``run_loop_gravity``), merged over its cached versions (layouts);
     the child reports where the version it loaded put them."""
     entries = sorted(cache.glob(f"hsgran_*/_loop.{loop}-*.nbc"))
@@ -100,7 +100,7 @@ def _library_symbols(cache: Path, loop: str) -> dict[str, tuple[int, int]]:
         for line in nm.stdout.splitlines():
             parts = line.split()
             if len(parts) == 4 and parts[2] in "tTwW":
-                symbols[parts[3]] = (int(parts[0], 16), int(parts[1], 16))
+                symbols[parts[3]] = int(parts[1], 16)
     return symbols
 
 
@@ -146,8 +146,14 @@ def main(argv=None) -> int:
     n = round(args.size)
     scene = str(Path(args.scene).resolve()) if args.scene else ""
     if scene:
-        from hsgran.scene import load_scene  # (a bad scene fails here, with its message)
-        sc = load_scene(scene)
+        from hsgran.errors import HsgranError
+        from hsgran.scene import load_scene
+
+        try:
+            sc = load_scene(scene)
+        except HsgranError as ex:
+            print(f"profile_loop: {ex}", file=sys.stderr)
+            return 2
         loop = "run_loop_gravity" if sc.effects.gravity else "run_loop_free"
         amount, first = (args.until or sc.duration), 1e-9
         what = f"{args.scene} to t = {amount:g} s"
@@ -165,9 +171,9 @@ def main(argv=None) -> int:
         out.write_text(json.dumps({"names": sorted(symbols)}))
         _run_child(n, amount, scene, args.cache, out, perf_data)
         addresses = json.loads(out.read_text())["addresses"]
-        script = subprocess.run(["perf", "script", "-i", str(perf_data), "-F", "ip,dso"],
+        script = subprocess.run(["perf", "script", "-i", str(perf_data), "-F", "ip"],
                                 capture_output=True, text=True, check=True).stdout
-    ranges = sorted((a, a + symbols[nm][1], nm) for nm, a in addresses.items() if a)
+    ranges = sorted((a, a + symbols[nm], nm) for nm, a in addresses.items() if a)
     starts = [r[0] for r in ranges]
     counts: collections.Counter = collections.Counter()
     outside = 0
