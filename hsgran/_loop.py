@@ -339,13 +339,15 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
     one of the two crosses again (Rapaport's treatment of cell crossings). Otherwise, or if the
     partner has moved on, all neighbouring cells are looked at.
     """
-    st, counter, acc, mstate, mplane, seg_end, seg_code = (
-        flight[0], flight[1], flight[2], flight[3], flight[4], flight[5], flight[6])
-    pc_t, pc_partner, pc_count = flight[7], flight[8], flight[9]
-    planes_p, planes_n = walls[0], walls[1]
-    box_len, periodic = space[1], space[2]
-    origin, csize, ncell, cell, head, nxt = grid[0], grid[1], grid[2], grid[3], grid[4], grid[5]
-    ev_t, ev_seq, ev_kind, ev_partner, ev_pcount = sched[0], sched[1], sched[2], sched[3], sched[4]
+    st, counter, acc, mstate = flight.st, flight.counter, flight.acc, flight.mstate
+    mplane, seg_end, seg_code = flight.mplane, flight.seg_end, flight.seg_code
+    pc_t, pc_partner, pc_count = flight.pc_t, flight.pc_partner, flight.pc_count
+    planes_p, planes_n = walls.planes_p, walls.planes_n
+    box_len, periodic = space.box_len, space.periodic
+    origin, csize, ncell = grid.origin, grid.csize, grid.ncell
+    cell, head, nxt = grid.cell, grid.head, grid.nxt
+    ev_t, ev_seq, ev_kind = sched.ev_t, sched.ev_seq, sched.ev_kind
+    ev_partner, ev_pcount = sched.ev_partner, sched.ev_pcount
     xi, yi, zi, ui, vi, wi = _state_at(st, acc, i, t_now, grav_on)
     ri = st[i, S_R]
     best = NEVER
@@ -398,7 +400,7 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
     # i's share of the rounding scales of an approach (motion.approach_noise)
     vs_i = abs(ui) + abs(vi) + abs(wi)
     xs_i = abs(xi) + abs(yi) + abs(zi)
-    heads, shifts, ac, ah = grid[7], grid[8], grid[9], grid[10]
+    heads, shifts, ac, ah = grid.heads, grid.shifts, grid.ac, grid.ah
     mx = _axis_cells(cell[i, 0], ncell[0], box_len[0], periodic[0], 0, ac, ah)
     my = _axis_cells(cell[i, 1], ncell[1], box_len[1], periodic[1], 1, ac, ah)
     mz = _axis_cells(cell[i, 2], ncell[2], box_len[2], periodic[2], 2, ac, ah)
@@ -438,7 +440,7 @@ def _predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
                     shifts[m, 1] = ah[1, b]
                     shifts[m, 2] = ah[2, c]
                     m += 1
-    if has_buckets(sched[5]):  # a large system: its rows are likely not in the cache
+    if has_buckets(sched.cal):  # a large system: its rows are likely not in the cache
         for q in range(m):
             prefetch(st, heads[q])
             prefetch(nxt, heads[q])
@@ -501,7 +503,7 @@ def _reschedule_fn(i, t_now, flight, walls, space, grid, sched, isc, grav_on):
     """Predict sphere i's next event (all neighbours) and move its calendar entry accordingly
     (for cold callers)."""
     _predict_fn(i, t_now, flight, walls, space, grid, sched, isc, grav_on)
-    calendar_update(sched[5], sched[0], sched[1], i)
+    calendar_update(sched.cal, sched.ev_t, sched.ev_seq, i)
 
 
 @njit(inline="always")
@@ -516,8 +518,8 @@ def _repredict_later(isc, p):
 @njit
 def _leave_plane(i, flight, dyn, gravity, rotation):
     """Sphere i flies again (a collision moved it): acceleration g, constant spin."""
-    acc, mstate, seg_end, seg_code = flight[2], flight[3], flight[5], flight[6]
-    alpha = dyn[5]
+    acc, mstate, seg_end, seg_code = flight.acc, flight.mstate, flight.seg_end, flight.seg_code
+    alpha = dyn.alpha
     mstate[i] = MS_FLIGHT
     seg_end[i] = NEVER
     seg_code[i] = END_NONE
@@ -541,10 +543,10 @@ def _stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
                    rotation):
     """Sphere p, on its plane, stops there: at rest, or, on a slope too steep for rest, starting
     a new segment from standstill."""
-    _halt(p, flight[0], dyn[0], rotation)
-    _enter_plane(p, np.int64(flight[4][p]), t, np.int64(END_NONE), flight, dyn, walls, gravity,
+    _halt(p, flight.st, dyn.omg, rotation)
+    _enter_plane(p, np.int64(flight.mplane[p]), t, np.int64(END_NONE), flight, dyn, walls, gravity,
                  pair_table, fsc, friction, rolling, rotation)
-    flight[1][p] += 1
+    flight.counter[p] += 1
 
 
 @njit
@@ -552,10 +554,10 @@ def _enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, fr
                  rotation):
     """Put sphere i on plane w at time t (or start its next segment there; ``snap`` is the
     transition that ended the last one): MODEL §5.3 through hsgran.onplane.plane_segment."""
-    st, acc, mstate, mplane, seg_end, seg_code = (flight[0], flight[2], flight[3], flight[4],
-                                                  flight[5], flight[6])
-    omg, mat, alpha, seg_dir = dyn[0], dyn[3], dyn[5], dyn[6]
-    planes_p, planes_n, planes_mat = walls[0], walls[1], walls[2]
+    st, acc, mstate = flight.st, flight.acc, flight.mstate
+    mplane, seg_end, seg_code = flight.mplane, flight.seg_end, flight.seg_code
+    omg, mat, alpha, seg_dir = dyn.omg, dyn.mat, dyn.alpha, dyn.seg_dir
+    planes_p, planes_n, planes_mat = walls.planes_p, walls.planes_n, walls.planes_mat
     nx = planes_n[w, 0]
     ny = planes_n[w, 1]
     nz = planes_n[w, 2]
@@ -685,8 +687,8 @@ def _wedge_stop(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, ro
     the run summary's "wedge" count says how often, and the event log has an entry for each
     stop (EV_WEDGE). A zero-time loop that meets no immovable body is left to the collapse
     guard."""
-    st, omg, mstate = flight[0], dyn[0], flight[3]
-    if dyn[4][p] < WEDGE_EVENTS or mstate[p] == MS_REST or (
+    st, omg, mstate = flight.st, dyn.omg, flight.mstate
+    if dyn.zstreak[p] < WEDGE_EVENTS or mstate[p] == MS_REST or (
             st[p, 3] == 0.0 and st[p, 4] == 0.0 and st[p, 5] == 0.0
             and (not rotation or (omg[p, 0] == 0.0 and omg[p, 1] == 0.0 and omg[p, 2] == 0.0))):
         return False  # nothing to stop
@@ -717,12 +719,13 @@ def _both_slow_on_supports(i, j, st, mstate, v_land):
 @njit
 def _fall_asleep(a, b, flight, dyn, rotation):
     """Sphere a rests on sphere b from now on: zero velocity, spin and acceleration."""
-    st, acc, mstate, mplane, seg_end = flight[0], flight[2], flight[3], flight[4], flight[5]
-    _halt(a, st, dyn[0], rotation)
+    st, acc, mstate = flight.st, flight.acc, flight.mstate
+    mplane, seg_end = flight.mplane, flight.seg_end
+    _halt(a, st, dyn.omg, rotation)
     for k in range(3):
         acc[a, k] = 0.0
         if rotation:
-            dyn[5][a, k] = 0.0
+            dyn.alpha[a, k] = 0.0
     mstate[a] = MS_REST
     mplane[a] = -2 - b  # the support: sphere b
     seg_end[a] = NEVER
@@ -731,11 +734,12 @@ def _fall_asleep(a, b, flight, dyn, rotation):
 @njit
 def _wake_sleepers(s, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation):
     """Sphere s was at rest and has been hit: every sphere asleep on it, and on those, falls."""
-    st, counter, acc, mstate, mplane = flight[0], flight[1], flight[2], flight[3], flight[4]
-    omg, alpha = dyn[0], dyn[5]
+    st, counter, acc = flight.st, flight.counter, flight.acc
+    mstate, mplane = flight.mstate, flight.mplane
+    omg, alpha = dyn.omg, dyn.alpha
     gravity, box_len, periodic = space
-    ncell, cell, head, nxt, ac, ah, stack = grid[2], grid[3], grid[4], grid[5], grid[9], \
-        grid[10], grid[11]
+    ncell, cell, head, nxt, ac, ah, stack = grid.ncell, grid.cell, grid.head, grid.nxt, grid.ac, \
+        grid.ah, grid.stack
     top = 0
     stack[top] = s
     top += 1
@@ -835,7 +839,7 @@ def _after_backed(p, c, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
     """Motion state of sphere p after a pair collision (c: its support cosine). A backed sphere
     on a plane starts a new segment there; a backed sleeper stays asleep if it is left slower
     than the landing speed (giving up less than ½ m v_land²); any other flies."""
-    st, mstate, mplane = flight[0], flight[3], flight[4]
+    st, mstate, mplane = flight.st, flight.mstate, flight.mplane
     if mstate[p] == MS_FLIGHT:
         return
     if c > 0.0 and mplane[p] >= 0:
@@ -843,7 +847,7 @@ def _after_backed(p, c, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
                      fsc, friction, rolling, rotation)
         return
     if _stays_asleep(p, c, st, mstate, mplane, fsc[F_LANDING_SPEED]):
-        _halt(p, st, dyn[0], rotation)
+        _halt(p, st, dyn.omg, rotation)
         return
     _leave_plane(p, flight, dyn, gravity, rotation)
     if mplane[p] < -1:
@@ -915,7 +919,7 @@ def _tc_row(row, t, t1, t2, fsc, row_tc):
 def _pressed(i, w, st, walls, gravity):
     """(normal load per unit mass g_n = −g·n [m/s²], normal velocity v·n [m/s]) of sphere i
     against plane w."""
-    planes_n = walls[1]
+    planes_n = walls.planes_n
     gn = -(gravity[0] * planes_n[w, 0] + gravity[1] * planes_n[w, 1]
            + gravity[2] * planes_n[w, 2])
     vn = st[i, 3] * planes_n[w, 0] + st[i, 4] * planes_n[w, 1] + st[i, 5] * planes_n[w, 2]
@@ -930,7 +934,7 @@ def _resting_plane(i, st, walls, gravity, v_land):
     given up is at most v_land) [OURS]. A sphere wedged between neighbours on a plane and
     hopped off them, slightly upwards, would otherwise meet them again and again before it
     ever came back to the plane."""
-    planes_p, planes_n = walls[0], walls[1]
+    planes_p, planes_n = walls.planes_p, walls.planes_n
     for w in range(planes_p.shape[0]):
         gap = ((st[i, 0] - planes_p[w, 0]) * planes_n[w, 0]
                + (st[i, 1] - planes_p[w, 1]) * planes_n[w, 1]
@@ -979,7 +983,7 @@ def _settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity, pair_table, fsc, f
     pair collides), and the sphere and partner of the event log's landing entry (partner
     −1 − w for plane w).
     """
-    st, counter, mstate, mplane = flight[0], flight[1], flight[3], flight[4]
+    st, counter, mstate, mplane = flight.st, flight.counter, flight.mstate, flight.mplane
     v_land = fsc[F_LANDING_SPEED]
     no_end = np.int64(END_NONE)
     for p in (i, j):
@@ -990,7 +994,7 @@ def _settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity, pair_table, fsc, f
                              friction, rolling, rotation)
                 counter[p] += 1
                 return SETTLE_PLANE, p, -1 - w
-    rapid, zstreak = dyn[9], dyn[4]
+    rapid, zstreak = dyn.rapid, dyn.zstreak
     sleeper = _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_land,
                             rapid[i] > JAM_EVENTS or zstreak[i] > JAM_EVENTS,
                             rapid[j] > JAM_EVENTS or zstreak[j] > JAM_EVENTS)
@@ -1023,7 +1027,7 @@ def _log(out, isc, t, jn, jt, en, kind, i, other, stage, regime):
     ``EV_LAND``, ``EV_WEDGE``) log zero impulses, e_n = NaN, the new motion state
     (hsgran.onplane ``MS_*``) as the stage and the transition that ended the last segment
     (``END_*``) as the regime."""
-    log_f, log_i = out[4], out[5]
+    log_f, log_i = out.log_f, out.log_i
     m = isc[I_N_LOG]
     log_f[m, 0] = t
     log_f[m, 1] = jn
@@ -1044,8 +1048,8 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
     grav_on = flags[FL_GRAVITY]
     no_end = np.int64(END_NONE)
-    st = flight[0]
-    planes_p, planes_n = walls[0], walls[1]
+    st = flight.st
+    planes_p, planes_n = walls.planes_p, walls.planes_n
     if grav_on:
         # spheres that start on a plane (touching it, not moving away faster than the
         # landing speed, pressed on by gravity) start in an on-plane state
@@ -1054,14 +1058,14 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
                 gap = ((st[i, 0] - planes_p[w, 0]) * planes_n[w, 0]
                        + (st[i, 1] - planes_p[w, 1]) * planes_n[w, 1]
                        + (st[i, 2] - planes_p[w, 2]) * planes_n[w, 2] - st[i, S_R])
-                gn, vn = _pressed(i, w, st, walls, space[0])
+                gn, vn = _pressed(i, w, st, walls, space.gravity)
                 if (abs(gap) <= START_GAP_REL * st[i, S_R] and gn > 0.0
-                        and vn <= fsc[F_LANDING_SPEED] and flight[3][i] == MS_FLIGHT):
-                    _enter_plane(i, w, 0.0, no_end, flight, dyn, walls, space[0],
+                        and vn <= fsc[F_LANDING_SPEED] and flight.mstate[i] == MS_FLIGHT):
+                    _enter_plane(i, w, 0.0, no_end, flight, dyn, walls, space.gravity,
                                  pair_table, fsc, friction, rolling, rotation)
     for i in range(st.shape[0]):
         _predict_fn(i, 0.0, flight, walls, space, grid, sched, isc, grav_on)
-    calendar_build(sched[5], sched[0], sched[1], 0.0)
+    calendar_build(sched.cal, sched.ev_t, sched.ev_seq, 0.0)
 
 
 @njit(inline="always")
@@ -1104,14 +1108,18 @@ def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
     adhesion, rotation = flags[FL_ADHESION], flags[FL_ROTATION]
     log_on = flags[FL_LOG]
     no_end = np.int64(END_NONE)  # a typed value, not a literal: one compiled _enter_plane
-    st, counter, acc, mstate, mplane = flight[0], flight[1], flight[2], flight[3], flight[4]
-    omg, inv_m, inv_i, mat, zstreak, alpha = dyn[0], dyn[1], dyn[2], dyn[3], dyn[4], dyn[5]
-    t_last, row_tc, rapid = dyn[7], dyn[8], dyn[9]
-    planes_n, planes_mat, planes_vel, planes_omg = walls[1], walls[2], walls[3], walls[4]
+    st, counter, acc = flight.st, flight.counter, flight.acc
+    mstate, mplane = flight.mstate, flight.mplane
+    omg, inv_m, inv_i = dyn.omg, dyn.inv_m, dyn.inv_i
+    mat, zstreak, alpha = dyn.mat, dyn.zstreak, dyn.alpha
+    t_last, row_tc, rapid = dyn.t_last, dyn.row_tc, dyn.rapid
+    planes_n, planes_mat = walls.planes_n, walls.planes_mat
+    planes_vel, planes_omg = walls.planes_vel, walls.planes_omg
     gravity, box_len, periodic = space
-    ncell, cell, head, nxt, prv = grid[2], grid[3], grid[4], grid[5], grid[6]
+    ncell, cell, head, nxt, prv = grid.ncell, grid.cell, grid.head, grid.nxt, grid.prv
     ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, cal = sched
-    fr_time, fr_pos, fr_vel, fr_omg, fr_ms = out[0], out[1], out[2], out[3], out[6]
+    fr_time, fr_pos, fr_vel = out.fr_time, out.fr_pos, out.fr_vel
+    fr_omg, fr_ms = out.fr_omg, out.fr_ms
     n = st.shape[0]
     t_end = fsc[F_T_END]
     executed = 0

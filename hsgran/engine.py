@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hsgran import _loop as ev
+from hsgran._state import Dyn, Flight, Grid, Out, Sched, Space, Walls, stored_fields
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.calendar import calendar_build, new_calendar
@@ -56,13 +57,9 @@ LOG_BUFFER = 1 << 16
 EVENTS_PER_CALL = 200_000
 #: Version of the checkpoint layout (:meth:`Simulation.checkpoint`); a checkpoint of another
 #: version is refused rather than misread (2: the pair contacts kept for cell crossings; 3: the
-#: "wedge" event count; 4: per-sphere fields at least FIELD_MIN long).
-CHECKPOINT_VERSION = 4
-#: Array groups of ``hsgran._loop`` whose arrays a checkpoint holds (the frame and log buffers,
-#: the seventh group, are empty at every checkpoint).
-CHECKPOINT_GROUPS = ("flight", "dyn", "walls", "space", "grid", "sched")
-#: Entries of the ``sched`` group that make up the event calendar (one tuple): rebuilt, not stored.
-CALENDAR_ENTRIES = 1
+#: "wedge" event count; 4: per-sphere fields at least FIELD_MIN long; 5: arrays named by field,
+#: hsgran._state, scratch space no longer stored).
+CHECKPOINT_VERSION = 5
 
 
 class SimulationError(HsgranError):
@@ -135,8 +132,8 @@ class Checkpoint:
     """A complete restart state of a :class:`Simulation` (see the module notes).
 
     Attributes:
-        arrays: Every state array by name (``flight0`` … ``sched4``, ``fsc``, ``isc``,
-            ``counts``, ``rec``); copies, not views.
+        arrays: Every state array by field name (hsgran._state: ``st``, ``counter``, …,
+            ``ev_pcount``, and ``fsc``, ``isc``, ``counts``, ``rec``); copies, not views.
         time: Time of the last processed event, or the end of the last call [s].
         frames: Frames handed to the observers so far.
         events: Event-log entries handed to the observers so far.
@@ -367,19 +364,21 @@ class Simulation:
         f.update({name: rec[name][:max(nc, FIELD_MIN)]
                   for name in ("pc_t", "pc_partner", "pc_count")})
         self._groups = (
-            (self.state, f["counter"], self.acc, self.mstate, self.mplane, self.seg_end,
-             self.seg_code, f["pc_t"], f["pc_partner"], f["pc_count"]),
-            (self.omg, f["inv_m"], f["inv_i"], f["mat"], f["zstreak"], self.alpha,
-             self.seg_dir, f["t_last"], np.zeros(self.pair_table.shape[-1]), f["rapid"]),
-            (self.planes_p, self.planes_n, self.planes_mat, self.planes_vel, self.planes_omg),
-            (self.gravity, self.box_len, self.periodic),
-            (self.origin, self.csize, self.ncell, f["cell"], self.head, self.nxt, self.prv,
-             np.zeros(27, dtype=np.int32), np.zeros((27, 3)), np.zeros((3, 3), dtype=np.int64),
-             np.zeros((3, 3)), np.zeros(n if eff.gravity else 1, dtype=np.int32)),
-            (self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount,
-             self.calendar),
-            (self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.log_f,
-             self.log_i, self.fr_ms),
+            Flight(self.state, f["counter"], self.acc, self.mstate, self.mplane, self.seg_end,
+                   self.seg_code, f["pc_t"], f["pc_partner"], f["pc_count"]),
+            Dyn(self.omg, f["inv_m"], f["inv_i"], f["mat"], f["zstreak"], self.alpha,
+                self.seg_dir, f["t_last"], np.zeros(self.pair_table.shape[-1]), f["rapid"]),
+            Walls(self.planes_p, self.planes_n, self.planes_mat, self.planes_vel,
+                  self.planes_omg),
+            Space(self.gravity, self.box_len, self.periodic),
+            Grid(self.origin, self.csize, self.ncell, f["cell"], self.head, self.nxt, self.prv,
+                 np.zeros(27, dtype=np.int32), np.zeros((27, 3)),
+                 np.zeros((3, 3), dtype=np.int64), np.zeros((3, 3)),
+                 np.zeros(n if eff.gravity else 1, dtype=np.int32)),
+            Sched(self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount,
+                  self.calendar),
+            Out(self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.log_f, self.log_i,
+                self.fr_ms),
         )
         flight, dyn, walls, space, grid, sched, _ = self._groups
         ev.init(flight, dyn, walls, space, grid, sched, self.pair_table, self.fsc, self.isc,
@@ -478,12 +477,8 @@ class Simulation:
                           i[:, 3].astype(np.int8), i[:, 4].astype(np.int8))
 
     def _state_arrays(self) -> dict:
-        """The arrays a checkpoint holds, by name (views of the live arrays)."""
-        arrays = {}
-        for name, group in zip(CHECKPOINT_GROUPS, self._groups, strict=False):
-            stored = len(group) - (CALENDAR_ENTRIES if name == "sched" else 0)
-            for k in range(stored):
-                arrays[f"{name}{k}"] = group[k]
+        """The arrays a checkpoint holds, by field name (views of the live arrays)."""
+        arrays = stored_fields(self._groups)
         arrays.update(fsc=self.fsc, isc=self.isc, counts=self.counts, rec=self.rec)
         return arrays
 
@@ -531,7 +526,7 @@ class Simulation:
         for name, target in live.items():
             target[...] = checkpoint.arrays[name]
         sched = self._groups[5]
-        calendar_build(sched[5], sched[0], sched[1], 0.0)
+        calendar_build(sched.cal, sched.ev_t, sched.ev_seq, 0.0)
         self._frames_emitted = int(checkpoint.frames)
         self._events_emitted = int(checkpoint.events)
 
