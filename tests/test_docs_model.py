@@ -85,5 +85,6 @@ def test_docs_model_has_every_section_once_and_in_order():
 def test_docs_model_says_what_the_citations_mean():
     text = MODEL_PAGE.read_text(encoding="utf-8")
     intro = text.split("\n## ", 1)[0]
-    assert "`MODEL §x.y`" in intro and "`MODEL.md §x.y`" in intro
+    assert "`MODEL §x.y`" in intro
+    assert "`MODEL.md §x.y`" in intro
     assert "(enduring-contact.md)" in text
