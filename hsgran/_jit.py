@@ -51,8 +51,7 @@ def njit(func=None, *, allocates=False, **options):
     pure cost: numba increments and decrements (atomically, out of line) the count of every
     array passed to an inlined helper, each array of a tuple argument included, and its
     pruning pass left 28 increments and 55 decrements in the compiled event loop. They took a
-    third of its time (tools/profile_loop.py, N = 10⁴ elastic gas: 32 % in NRT_incref and
-    NRT_decref); without them the gas runs 1.5x faster at every size (tools/bench_engine.py).
+    third of its time (tools/profile_loop.py; the measurements are in docs/performance.md).
 
     The price: such a kernel cannot create arrays, nor return an array other than one of its
     arguments (a counting caller would release it once too often); numba refuses to compile

@@ -35,12 +35,13 @@ Prints figures only (no pass/fail), with the targets next to them:
   (seeds 1, 2, ...) are run until the timed total reaches ``--seconds``.
 - **Settling pile**: ``tools/scenes/pour.toml`` (2000 steel spheres poured into a glass box at
   e = 0.5, with the enduring-contact rules of docs/enduring-contact.md) run to ``--pile-until``
-  (default 0.2 s, while the pile forms and events are densest; ``--pile-until 0.7`` runs it
-  until every sphere is at rest, about 2.5 min, see that page): events per particle
+  (default 0.2 s, while the pile forms and events are densest; ``--pile-until 1`` runs it
+  until every sphere is at rest, see that page): events per particle
   per simulated second (collisions, landings and motion-state changes) in the last 0.05 s and
   over the whole run, spheres at rest, wall time, engine bytes per particle and peak RSS.
 
-The machine may be shared: figures are noisy; compare runs on an idle machine.
+The machine may be shared: figures are noisy; compare runs on an idle machine. Current
+figures and their history: docs/performance.md.
 """
 
 from __future__ import annotations

@@ -19,9 +19,8 @@ directory (``--cache``, default /tmp/hsgran-profile-cache; a cold compile takes 
 two the first time), so the ordinary cache is left alone. Needs ``perf`` (Debian package
 linux-perf) and permission to sample user code (perf_event_paranoid ≤ 2).
 
-This measurement found numba's reference counting at a third of the loop's time (NRT_incref
-and NRT_decref, out-of-line calls for every array of every inlined helper), see
-hsgran._jit.njit.
+What it has found is recorded in docs/performance.md (numba's reference counting, see
+hsgran._jit.njit).
 """
 
 from __future__ import annotations

@@ -28,10 +28,8 @@ from the spread of the keys at the start and then from the count of each revolut
 Below :data:`BUCKETS_FROM` entries there are no buckets (``nb`` = 0): every entry stays in the
 heap, which then fits the cache. Whether there are buckets is a constant of the calendar's tuple
 type (:func:`has_buckets`), so LLVM drops the bucket code from a loop compiled for a calendar
-without them. Tested at run time instead, it made the event loop at N = 10³ run at 0.80 of the
-rate of a plain heap; with the constant, 0.89 (chunks alternating in one process). A loop with
-the heap's functions wired in, no bucket code anywhere in its source, gained only 3 % more, so
-the rest of that gap is not the calendar's code.
+without them; tested at run time instead, the bucket code slowed small systems down
+(measurements in docs/performance.md).
 
 ``where[e]`` says where entry e is: its heap position (≥ 0), :data:`IN_OVERFLOW`, or
 ``IN_BUCKET0 − slot`` in the list of bucket ``slot``.
