@@ -337,27 +337,6 @@ def test_fill_in_a_periodic_box_respects_the_images():
     assert brute_force_overlaps(s.position, s.radius, period=[0.1, 0.1, 0.1]).size == 0
 
 
-def test_fill_kernel_compiled_and_python_agree():
-    """The compiled placement and its plain-Python source consume the same numbers alike."""
-    kernel = scene_module._rsa_kernel
-    if not hasattr(kernel, "py_func"):
-        pytest.skip("numba JIT disabled: only the Python kernel exists")
-    args = dict(radii=np.random.default_rng(0).uniform(0.002, 0.004, 200),
-                lower=np.zeros(3), upper=np.full(3, 0.06),
-                planes=[(np.array([0.0, 0.0, 0.01]), np.array([0.0, 0.0, 1.0]))],
-                placed_pos=np.array([[0.03, 0.03, 0.03]]), placed_rad=np.array([0.01]),
-                shift=(np.zeros(3), np.array([0.06, 0.06, 0.0])), budget=100_000)
-    fast, n_fast = scene_module._random_sequential_addition(np.random.default_rng(3), **args)
-    try:
-        scene_module._rsa_kernel = kernel.py_func
-        slow, n_slow = scene_module._random_sequential_addition(np.random.default_rng(3), **args)
-    finally:
-        scene_module._rsa_kernel = kernel
-    assert n_fast == n_slow
-    np.testing.assert_array_equal(fast, slow)
-    assert not np.isnan(fast).any()
-
-
 def test_fill_that_cannot_be_placed_says_how_many_it_placed():
     # 0.5 of the region's volume: above what random placement reaches, below the refusal limit
     with pytest.raises(InputError, match=r"^fill\[0\]\.count: placed only \d+ of 200 spheres"):
