@@ -502,6 +502,26 @@ def test_broken_scene_is_refused_with_the_key_path(text, key, fragment):
     assert fragment in message, message
 
 
+def test_the_first_problem_in_the_order_of_the_checks_is_reported():
+    """[scene], [output], walls, particles, fills, then the cross checks (hsgran.scene._build)."""
+    bad_fill = fill_text(speed=-1.0)
+    assert bad_fill.count("frame_interval = 0.01") == 1
+    cases = [
+        (bad_fill.replace("duration = 1.0", "duration = -1.0"), "scene.duration"),
+        (bad_fill.replace("frame_interval = 0.01", "frame_interval = 0.0"),
+         "output.frame_interval"),
+        (bad_fill.replace('kind = "box"', 'kind = "boxx"'), "walls[0].kind"),
+        (bad_fill + BALL.replace("0.005", "-0.005"), "particles[0].radius"),
+        (bad_fill + BALL.replace("[0.0, 0.0, 0.1]", "[0.0, 0.0, 0.5]"), "fill[0].speed"),
+        (fill_text() + BALL.replace("[0.0, 0.0, 0.1]", "[0.0, 0.0, 0.5]"),
+         "particles[0].position"),
+    ]
+    for text, key in cases:
+        with pytest.raises(InputError) as info:
+            parse_scene(text)
+        assert info.value.key == key, str(info.value)
+
+
 def test_load_scene_reports_a_missing_file(tmp_path):
     with pytest.raises(InputError, match="file not found"):
         load_scene(tmp_path / "nope.toml")

@@ -98,7 +98,6 @@ def cell_coordinates(pos, origin, size, ncell, periodic):
     return c
 
 
-
 @njit
 def axis_coordinate(x, origin, size, n, periodic):
     """Integer cell coordinate of one position component: :func:`cell_coordinates` for one
