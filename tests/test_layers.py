@@ -25,6 +25,7 @@ LAYERS = {
     "events.": 3,
     "impact": 4,
     "scene": 4,
+    "placement": 4,
     "overrides": 4,
     "physics": 4,
     "engine": 5,

@@ -337,27 +337,6 @@ def test_fill_in_a_periodic_box_respects_the_images():
     assert brute_force_overlaps(s.position, s.radius, period=[0.1, 0.1, 0.1]).size == 0
 
 
-def test_fill_kernel_compiled_and_python_agree():
-    """The compiled placement and its plain-Python source consume the same numbers alike."""
-    kernel = scene_module._rsa_kernel
-    if not hasattr(kernel, "py_func"):
-        pytest.skip("numba JIT disabled: only the Python kernel exists")
-    args = dict(radii=np.random.default_rng(0).uniform(0.002, 0.004, 200),
-                lower=np.zeros(3), upper=np.full(3, 0.06),
-                planes=[(np.array([0.0, 0.0, 0.01]), np.array([0.0, 0.0, 1.0]))],
-                placed_pos=np.array([[0.03, 0.03, 0.03]]), placed_rad=np.array([0.01]),
-                shift=(np.zeros(3), np.array([0.06, 0.06, 0.0])), budget=100_000)
-    fast, n_fast = scene_module._random_sequential_addition(np.random.default_rng(3), **args)
-    try:
-        scene_module._rsa_kernel = kernel.py_func
-        slow, n_slow = scene_module._random_sequential_addition(np.random.default_rng(3), **args)
-    finally:
-        scene_module._rsa_kernel = kernel
-    assert n_fast == n_slow
-    np.testing.assert_array_equal(fast, slow)
-    assert not np.isnan(fast).any()
-
-
 def test_fill_that_cannot_be_placed_says_how_many_it_placed():
     # 0.5 of the region's volume: above what random placement reaches, below the refusal limit
     with pytest.raises(InputError, match=r"^fill\[0\]\.count: placed only \d+ of 200 spheres"):
@@ -521,6 +500,26 @@ def test_broken_scene_is_refused_with_the_key_path(text, key, fragment):
     assert "\n" not in message
     assert message.startswith(key), message
     assert fragment in message, message
+
+
+def test_the_first_problem_in_the_order_of_the_checks_is_reported():
+    """[scene], [output], walls, particles, fills, then the cross checks (hsgran.scene._build)."""
+    bad_fill = fill_text(speed=-1.0)
+    assert bad_fill.count("frame_interval = 0.01") == 1
+    cases = [
+        (bad_fill.replace("duration = 1.0", "duration = -1.0"), "scene.duration"),
+        (bad_fill.replace("frame_interval = 0.01", "frame_interval = 0.0"),
+         "output.frame_interval"),
+        (bad_fill.replace('kind = "box"', 'kind = "boxx"'), "walls[0].kind"),
+        (bad_fill + BALL.replace("0.005", "-0.005"), "particles[0].radius"),
+        (bad_fill + BALL.replace("[0.0, 0.0, 0.1]", "[0.0, 0.0, 0.5]"), "fill[0].speed"),
+        (fill_text() + BALL.replace("[0.0, 0.0, 0.1]", "[0.0, 0.0, 0.5]"),
+         "particles[0].position"),
+    ]
+    for text, key in cases:
+        with pytest.raises(InputError) as info:
+            parse_scene(text)
+        assert info.value.key == key, str(info.value)
 
 
 def test_load_scene_reports_a_missing_file(tmp_path):

@@ -12,6 +12,8 @@ away spheres that the distance test then rejects.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from hsgran._jit import njit
@@ -95,3 +97,58 @@ def cell_coordinates(pos, origin, size, ncell, periodic):
             c[:, k] = np.clip(c[:, k], 0, ncell[k] - 1)
     return c
 
+
+@njit
+def axis_coordinate(x, origin, size, n, periodic):
+    """Integer cell coordinate of one position component: :func:`cell_coordinates` for one
+    point along one axis, callable from compiled kernels.
+
+    Args:
+        x: Position component [m].
+        origin, size: The axis's grid origin and cell size [m] (from :func:`plan_grid`).
+        n: Number of cells along the axis.
+        periodic: Whether the axis is periodic (then the coordinate is clipped into [0, n)).
+    """
+    c = math.floor((x - origin) / size)
+    if periodic:
+        c = min(max(c, 0), n - 1)
+    return c
+
+
+@njit
+def axis_neighbours(c, n, out):
+    """Coordinates of the cells within one cell of coordinate ``c`` along an axis of ``n``
+    cells, own cell first, each list slot once.
+
+    With fewer than three cells the coordinates ``c - 1`` and ``c + 1`` share a slot (or share
+    it with ``c``), so they are left out: a search visits every slot once.
+
+    Args:
+        c: Cell coordinate (any integer: :func:`slot_of` takes it modulo ``n``).
+        n: Number of cells along the axis.
+        out: (3,) int array receiving the coordinates.
+
+    Returns:
+        How many entries of ``out`` were written (1, 2 or 3).
+    """
+    out[0] = c
+    if n == 1:
+        return 1
+    out[1] = c + 1
+    if n == 2:
+        return 2
+    out[2] = c - 1
+    return 3
+
+
+@njit
+def insert_all(cell, head, nxt, prv, ncell):
+    """Put spheres ``0 .. len(cell) - 1`` into the lists of their cells, in index order.
+
+    Args:
+        cell: Integer cell coordinates (N, 3) (from :func:`cell_coordinates`).
+        head, nxt, prv: Empty lists (``head`` all -1) with room for the N spheres.
+        ncell: Number of cells per axis (3,).
+    """
+    for i in range(cell.shape[0]):
+        insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
