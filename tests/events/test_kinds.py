@@ -31,7 +31,8 @@ def test_every_kind_has_a_plain_int_constant_and_a_name():
         value = getattr(kinds, f"EV_{k.name.upper()}")
         assert type(value) is int  # numba folds plain module-level ints only
         assert value == k.code
-        assert k.description and "\n" not in k.description
+        assert k.description
+        assert "\n" not in k.description
 
 
 def test_the_compiled_loop_re_exports_the_same_constants():
