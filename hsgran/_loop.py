@@ -44,6 +44,21 @@ from hsgran.events.calendar import (
     has_buckets,
 )
 from hsgran.events.grid import insert, remove, slot_of
+from hsgran.events.kinds import (
+    EV_CELL,
+    EV_FRAME,
+    EV_HOP,
+    EV_LAND,
+    EV_MISS,
+    EV_NONE,
+    EV_PAIR,
+    EV_STALE,
+    EV_STATE,
+    EV_TC,
+    EV_WALL,
+    EV_WEDGE,
+)
+from hsgran.events.kinds import EVENT_NAMES as EVENT_NAMES  # re-exported for hsgran.engine
 from hsgran.events.queue import ARITY
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import (
@@ -57,21 +72,6 @@ from hsgran.motion import (
     plane_contact_time,
 )
 from hsgran.onplane import END_NONE, MS_ASLEEP, MS_FLIGHT, MS_REST, plane_segment
-
-EV_NONE = 0  #: nothing scheduled
-EV_PAIR = 1  #: sphere–sphere collision
-EV_WALL = 2  #: sphere–plane collision
-EV_CELL = 3  #: sphere leaves its cell
-EV_FRAME = 4  #: output tick (entry N)
-EV_STALE = 5  #: (counter only) popped pair events dropped because the partner changed
-EV_MISS = 6  #: (counter only) popped collisions whose bodies were found not approaching
-EV_STATE = 7  #: a sphere's on-plane motion segment ends (slide → roll, roll → rest, …)
-EV_LAND = 8  #: (counter only) a sphere reached a plane too slowly to bounce and stays on it
-EV_TC = 9  #: (counter only) collisions made elastic by the TC model (see F_TC_TIME)
-EV_HOP = 10  #: (counter only) pair collisions executed as a hop (see _hop)
-EV_WEDGE = 11  #: a sphere stopped in a zero-time wedge sequence (see _wedge_stop)
-EVENT_NAMES = ("none", "pair", "wall", "cell", "frame", "stale", "miss", "state", "land", "tc",
-               "hop", "wedge")
 
 # float scalars
 F_T_CUR = 0  #: time of the last popped event [s]

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from hsgran._loop import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
 from hsgran.contact.tangential import REGIME_NONE, REGIME_ROLLING, REGIME_SLIDING
 from hsgran.errors import InputError
+from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
 from hsgran.onplane import MS_ASLEEP, MS_FLIGHT, MS_REST, MS_ROLLING, MS_SLIDING
 from hsgran.scene import Plane
 

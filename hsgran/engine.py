@@ -90,7 +90,7 @@ class EventBlock:
     """Executed collisions (the event log)."""
 
     time: np.ndarray  #: [s]
-    kind: np.ndarray  #: 1 pair, 2 wall, 7 motion-state change, 8 landing, 11 wedge stop
+    kind: np.ndarray  #: event kind code: the logged rows of hsgran.events.kinds.KINDS
     i: np.ndarray  #: sphere index
     j: np.ndarray  #: partner sphere, or −1 − w for plane w
     normal_impulse: np.ndarray  #: J_n [N s]

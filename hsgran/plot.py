@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hsgran._loop import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
 from hsgran.errors import InputError, MissingDependency
+from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
 from hsgran.io.h5md import read_trajectory
 
 #: Scenes with at most this many particles get the per-particle panels by default; more lines

@@ -44,11 +44,11 @@ from hsgran.contact.model import (
     make_resolver,
 )
 from hsgran.errors import HsgranError
+from hsgran.events.kinds import EV_PAIR, EV_WALL
 from hsgran.materials import SOLID_SPHERE_INERTIA
 
-KIND_PAIR = 1  #: sphere–sphere collision (the engine's event kind code)
-KIND_WALL = 2  #: sphere–plane collision
-KIND_RECHECK = 3  #: (queue only) look at a pair again: its nearest periodic image may change
+#: (queue only, never logged) look at a pair again: its nearest periodic image may change
+KIND_RECHECK = 3
 
 #: Fraction of the image horizon (see :meth:`_Reference.predict_pair`) after which a pair on
 #: periodic axes is looked at again. The horizon is exact in exact arithmetic, so any fraction
@@ -77,7 +77,7 @@ class ReferenceResult:
 
     Attributes:
         time: Collision times [s], (C,).
-        kind: 1 sphere–sphere, 2 sphere–plane, (C,) int8.
+        kind: ``EV_PAIR`` or ``EV_WALL`` (:mod:`hsgran.events.kinds`), (C,) int8.
         i: The sphere whose prediction found the event, (C,) int64.
         j: Partner sphere, or −1 − w for plane w, (C,) int64.
         normal_impulse: J_n [N s], (C,).
@@ -292,7 +292,7 @@ class _Reference:
     # -- prediction --
 
     def _push(self, t, kind, a, b):
-        cb = self.count[b] if kind != KIND_WALL else 0
+        cb = self.count[b] if kind != EV_WALL else 0
         heapq.heappush(self.queue, (t, self.seq, kind, a, b, self.count[a], cb))
         self.seq += 1
 
@@ -308,7 +308,7 @@ class _Reference:
             gn = g[0] * nrm[0] + g[1] * nrm[1] + g[2] * nrm[2]
             tau = _touch_time_plane(gap, vn, gn)
             if tau < math.inf:
-                self._push(t + tau, KIND_WALL, i, w)
+                self._push(t + tau, EV_WALL, i, w)
         for j in range(self.n):
             if j == i or j in skip:
                 continue
@@ -334,7 +334,7 @@ class _Reference:
                 horizon = min(horizon, (self.period[k] - abs(d[k]) - sigma) / abs(w[k]))
         if tau <= horizon:
             if tau < math.inf:
-                self._push(t + tau, KIND_PAIR, i, j)
+                self._push(t + tau, EV_PAIR, i, j)
         else:
             self._push(t + IMAGE_HORIZON_FRACTION * horizon, KIND_RECHECK, i, j)
 
@@ -372,7 +372,7 @@ class _Reference:
         ra = self.radius[a]
         self.advance(a, t)
         wa = self.omg[a] if rotation else self.wall_omg
-        if kind == KIND_PAIR:
+        if kind == EV_PAIR:
             self.advance(b, t)
             rb = self.radius[b]
             d = self.separation(self.x0[a], self.x0[b])
@@ -394,7 +394,7 @@ class _Reference:
             return None
         self.v0[a] = [float(c) for c in self.vel[a]]
         self.count[a] += 1
-        if kind == KIND_PAIR:
+        if kind == EV_PAIR:
             self.v0[b] = [float(c) for c in self.vel[b]]
             self.count[b] += 1
         self.dissipated += float(rec[REC_ENERGY_LOST])
@@ -410,7 +410,7 @@ class _Reference:
             t, _, kind, a, b, ca, cb = entry
             if t > t_stop:
                 return entry
-            if ca == self.count[a] and (kind == KIND_WALL or cb == self.count[b]):
+            if ca == self.count[a] and (kind == EV_WALL or cb == self.count[b]):
                 if kind != KIND_RECHECK:
                     return entry
                 xa, va = self.state(a, t)
@@ -439,7 +439,7 @@ class _Reference:
             else:
                 log.append(row)
             self.predict(a, t)
-            if kind == KIND_PAIR:
+            if kind == EV_PAIR:
                 self.predict(b, t, skip=(a,))
         else:
             t_end = log[-1][0] if log else 0.0

@@ -15,9 +15,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hsgran import animation as an
-from hsgran._loop import EV_PAIR, EV_STATE, EV_WALL
 from hsgran.contact.tangential import REGIME_ROLLING, REGIME_SLIDING
 from hsgran.errors import InputError
+from hsgran.events.kinds import EV_PAIR, EV_STATE, EV_WALL
 from hsgran.onplane import MS_FLIGHT, MS_ROLLING, MS_SLIDING
 from hsgran.scene import Plane
 

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from hsgran._loop import EV_WEDGE
 from hsgran.engine import EventBlock, Simulation
+from hsgran.events.kinds import EV_WEDGE
 from hsgran.onplane import MS_REST
 from hsgran.scene import load_scene, parse_scene
 from tests.scenes import FLOOR, num, plane, sphere

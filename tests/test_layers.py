@@ -1,6 +1,7 @@
 """Imports flow one way: a module never imports from a higher layer (DESIGN.md §1)."""
 
 import ast
+import re
 from pathlib import Path
 
 import hsgran
@@ -17,17 +18,16 @@ LAYERS = {
     "materials": 1,
     "refdata": 1,
     "data": 0,
-    "geometry": 1,
     "_loop": 5,
     "contact.": 2,
     "motion": 2,
     "onplane": 2,
     "events.": 3,
+    "events.kinds": 3,
     "impact": 4,
     "scene": 4,
     "placement": 4,
     "overrides": 4,
-    "physics": 4,
     "engine": 5,
     "reference": 5,
     "dem.": 5,
@@ -82,6 +82,24 @@ def imported_hsgran_modules(path: Path):
 def test_every_module_has_a_layer():
     for name, _ in modules():
         layer_of(name)
+
+
+def test_every_layer_entry_names_a_module():
+    names = [name for name, _ in modules()]
+    stale = [key for key in LAYERS
+             if not (any((name + ".").startswith(key) for name in names) if key.endswith(".")
+                     else key in names)]
+    assert not stale, f"LAYERS entries that name no module of hsgran: {stale}"
+
+
+def test_module_docstrings_state_their_own_layer():
+    wrong = []
+    for name, path in modules():
+        doc = ast.get_docstring(ast.parse(path.read_text(), filename=str(path))) or ""
+        for said in re.findall(r"\blayer (\d+)", doc, flags=re.IGNORECASE):
+            if int(said) != layer_of(name):
+                wrong.append(f"hsgran.{name} says layer {said}, LAYERS says {layer_of(name)}")
+    assert not wrong, "\n".join(wrong)
 
 
 def test_imports_flow_one_way():

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from hsgran import plot as hplot
-from hsgran._loop import EV_PAIR, EV_STATE, EV_WALL
 from hsgran.cli import main
+from hsgran.events.kinds import EV_PAIR, EV_STATE, EV_WALL
 from hsgran.io.h5md import TrajectoryWriter, read_trajectory
 from tests.cli_errors import run_error
 

@@ -58,8 +58,8 @@ from pathlib import Path
 
 import numpy as np
 
-from hsgran._loop import EVENT_NAMES
 from hsgran.engine import Simulation, SimulationError
+from hsgran.events.kinds import EVENT_NAMES
 from hsgran.onplane import MS_REST
 from hsgran.scene import load_scene, parse_scene
 

@@ -68,6 +68,9 @@ REC_T_CONTACT = 19  #: contact duration (elastic stage only, Hertz) [s]
 REC_SIZE = 20
 
 
+# long: one collision in the fixed order of MODEL.md §6, read top to bottom against the model;
+# its steps share the contact velocity, impulses and losses as scalar locals, which helpers of
+# this kernel (inlined into the event loop) would pass back and forth as tuples.
 @njit(inline="always")
 def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, curv, row, rec,
             plasticity, friction, rolling, adhesion, rotation, diagnostics):

@@ -1,2 +1,2 @@
-"""Event bookkeeping (layer 3): the priority queue and the cell grid. Knows motion, not
-collision physics."""
+"""Event bookkeeping (layer 3): the event kinds, the priority queue and the cell grid. Knows
+motion, not collision physics."""

@@ -1,4 +1,4 @@
-"""The event calendar: the priority queue of the event loop (layer 1).
+"""The event calendar: the priority queue of the event loop (layer 3).
 
 A queue of a fixed set of entries (one per sphere and the frame tick), each with one key
 (time, seq) at a time; ``inf`` means "nothing scheduled". The key of entry e is

@@ -1,4 +1,4 @@
-"""Indexed 4-ary min-heap of a varying subset of entries (layer 1).
+"""Indexed 4-ary min-heap of a varying subset of entries (layer 3).
 
 The event calendar (:mod:`hsgran.events.calendar`) keeps the events of its current time bucket
 here. Ties in time are broken by the sequence number ``seq``, which the scheduler increments at

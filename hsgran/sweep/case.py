@@ -28,16 +28,11 @@ import numpy as np
 from hsgran.api import TrajectoryObserver, open_writer
 from hsgran.engine import EventBlock, RunSummary, Simulation
 from hsgran.errors import HsgranError, InputError
+from hsgran.events.kinds import EV_PAIR, EV_WALL
 from hsgran.onplane import MS_ASLEEP, MS_REST
 from hsgran.scene import Scene, load_scene, parse_scene
 from hsgran.sweep import store
-from hsgran.sweep.summaries import (
-    PAIR_EVENT,
-    WALL_EVENT,
-    FirstCollision,
-    RunRecord,
-    evaluate,
-)
+from hsgran.sweep.summaries import FirstCollision, RunRecord, evaluate
 
 
 class _Log:
@@ -74,7 +69,7 @@ def _scene(scene, overrides, source: str) -> Scene:
 
 
 def _first_collision(sim: Simulation, scene: Scene, log: dict) -> FirstCollision | None:
-    hits = np.flatnonzero((log["kind"] == PAIR_EVENT) | (log["kind"] == WALL_EVENT))
+    hits = np.flatnonzero((log["kind"] == EV_PAIR) | (log["kind"] == EV_WALL))
     if len(hits) == 0:
         return None
     k = int(hits[0])

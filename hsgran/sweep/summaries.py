@@ -24,9 +24,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: Event kinds of the event log (hsgran._loop.EV_PAIR, EV_WALL), spelt out so that parsing a
-#: sweep file does not import the engine.
-PAIR_EVENT, WALL_EVENT = 1, 2
 #: Below this fraction of the incident speed, the incident tangential velocity counts as zero
 #: (a normal impact): its direction is then round-off, and the signed quantities use |v_t|.
 NORMAL_IMPACT_FRACTION = 1e-12

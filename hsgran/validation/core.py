@@ -29,6 +29,7 @@ import numpy as np
 from hsgran import refdata
 from hsgran.engine import EventBlock, RunSummary, Simulation
 from hsgran.errors import HsgranError, MissingDependency
+from hsgran.events.kinds import EV_PAIR, EV_WALL
 from hsgran.scene import Scene, load_scene, parse_scene
 
 # ---- tolerances (each with the reason for its size) --------------------------------------
@@ -306,10 +307,6 @@ def quantity_extent(table: dict, quantity: str, xcol: str, ycol: str) -> tuple[f
 
 # ---- running scenes through the engine ---------------------------------------------------
 
-#: Event kinds of the engine's log that are collisions (hsgran.engine.EventBlock.kind).
-PAIR_EVENT, WALL_EVENT = 1, 2
-
-
 #: The engine's event log of one run, concatenated.
 EventLog = EventBlock
 
@@ -348,8 +345,8 @@ class EngineRun:
     def collisions(self, i: int) -> np.ndarray:
         """Indices into the log of the collisions (pair or wall) of sphere ``i``."""
         lg = self.log
-        hit = (lg.kind == PAIR_EVENT) | (lg.kind == WALL_EVENT)
-        return np.flatnonzero(hit & ((lg.i == i) | ((lg.kind == PAIR_EVENT) & (lg.j == i))))
+        hit = (lg.kind == EV_PAIR) | (lg.kind == EV_WALL)
+        return np.flatnonzero(hit & ((lg.i == i) | ((lg.kind == EV_PAIR) & (lg.j == i))))
 
     def only_collision(self, i: int) -> int:
         """Index into the log of sphere ``i``'s one impact.
