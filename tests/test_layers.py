@@ -19,6 +19,7 @@ LAYERS = {
     "refdata": 1,
     "data": 0,
     "_loop": 5,
+    "_state": 5,
     "contact.": 2,
     "motion": 2,
     "onplane": 2,
