@@ -66,3 +66,51 @@ def stored_fields(groups) -> dict:
     """
     return {name: array for group in groups
             for name, array in zip(group._fields, group, strict=True) if name not in NOT_STORED}
+
+
+# ---- scalars and switches of the compiled loop -------------------------------------------
+
+
+# float scalars
+F_T_CUR = 0  #: time of the last popped event [s]
+F_T_END = 1  #: stop before events later than this [s]
+F_FRAME_DT = 2  #: frame interval [s]
+F_DISSIPATED = 3  #: energy the collision model took so far (hops: negative) [J]
+F_LANDING_SPEED = 4  #: rebound speed below which a sphere stays on a plane [m/s]
+F_CHI = 5  #: rolling-torque convention while sliding (hsgran.onplane CONVENTION_A/_B)
+#: TC model (Luding & McNamara 1998) [s]: a collision of a sphere less than this after its
+#: previous collision is elastic (e_n = 1; friction still acts), which ends the infinite
+#: sequences of ever-smaller collisions of inelastic collapse in clusters; 0 turns it off
+F_TC_TIME = 6
+F_SIZE = 7
+# int scalars
+I_SEQ = 0  #: next sequence number (tie-break)
+I_N_FRAMES = 1  #: frames in the buffer
+I_N_LOG = 2  #: event-log entries in the buffer
+I_FRAME_INDEX = 3  #: index of the next frame (its time is index × frame_dt)
+I_N_EVENTS = 4  #: events executed in total
+I_COLLAPSED = 5  #: sphere that triggered the collapse guard, or −1
+I_PEND_A = 6  #: a sphere whose next event must be predicted before the next pop, or −1
+I_PEND_B = 7  #: a second one, or −1
+I_PEND_LAYER = 8  #: the cell face that the sphere in I_PEND_A just crossed (EV_CELL), or −1
+I_SIZE = 9
+
+# effect and engine switches: the ``flags`` argument, a bool array of FL_SIZE entries. They are
+# run-time values, so one compiled loop serves every scene with gravity and one every scene
+# without (a cold compile costs tens of seconds; gravity alone is a compile-time constant, see
+# run_loop); a disabled effect is skipped by one predictable branch and its code never runs.
+FL_PLASTICITY = 0  #: staged normal model (MODEL §3); else elastic Hertz
+FL_FRICTION = 1  #: tangential impulse (MODEL §4)
+FL_ROLLING = 2  #: rolling resistance (MODEL §5)
+FL_ADHESION = 3  #: adhesion in recovery (MODEL §3.8)
+FL_ROTATION = 4  #: spins are tracked
+FL_GRAVITY = 5  #: parabolic flight, on-plane motion states
+FL_LOG = 6  #: record every event in the log buffer
+FL_SIZE = 7
+
+# What a prediction reads of a neighbour sits in one 64-byte row (one cache line) of ``st``:
+S_X = 0  #: position x, y, z at the sphere's local time [m] (columns 0–2)
+S_V = 3  #: velocity at the local time [m/s] (columns 3–5)
+S_T = 6  #: local time: the stored state is valid at this instant [s]
+S_R = 7  #: radius [m]
+S_WIDTH = 8

@@ -38,6 +38,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from hsgran import _loop as ev
+from hsgran import _state as es
+from hsgran._flight import MAX_ZERO_TIME_EVENTS
 from hsgran._state import Dyn, Flight, Grid, Out, Sched, Space, Walls, stored_fields
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
@@ -52,8 +54,10 @@ FRAME_BUFFER_BYTES = 32 * 2**20
 FRAME_BUFFER_MAX = 1000
 #: Event-log entries buffered before they are handed to observers.
 LOG_BUFFER = 1 << 16
-#: Collisions executed per compiled call between progress updates. It also bounds how long an
-#: interrupt waits for the engine to notice it (~0.5 s at the measured 4e5 events/s).
+#: Events of any kind (collisions, cell crossings, motion-state changes, frames, stale and
+#: missed events) popped per compiled call between progress updates. It bounds how long an
+#: interrupt waits for the engine to notice it (~0.2 s at 1e6 events/s), also in runs where
+#: cell crossings outnumber collisions.
 EVENTS_PER_CALL = 200_000
 #: Version of the checkpoint layout (:meth:`Simulation.checkpoint`); a checkpoint of another
 #: version is refused rather than misread (2: the pair contacts kept for cell crossings; 3: the
@@ -232,19 +236,19 @@ class Simulation:
         self.n = n
         self.rotation = bool(eff.rotation)
         self.log_events = bool(log_events)
-        self.flags = np.zeros(ev.FL_SIZE, dtype=np.bool_)
-        for k, on in ((ev.FL_PLASTICITY, eff.plasticity), (ev.FL_FRICTION, eff.friction),
-                      (ev.FL_ROLLING, eff.rolling_resistance), (ev.FL_ADHESION, eff.adhesion),
-                      (ev.FL_ROTATION, eff.rotation), (ev.FL_GRAVITY, eff.gravity),
-                      (ev.FL_LOG, self.log_events)):
+        self.flags = np.zeros(es.FL_SIZE, dtype=np.bool_)
+        for k, on in ((es.FL_PLASTICITY, eff.plasticity), (es.FL_FRICTION, eff.friction),
+                      (es.FL_ROLLING, eff.rolling_resistance), (es.FL_ADHESION, eff.adhesion),
+                      (es.FL_ROTATION, eff.rotation), (es.FL_GRAVITY, eff.gravity),
+                      (es.FL_LOG, self.log_events)):
             self.flags[k] = bool(on)
         self.gravity = np.ascontiguousarray(scene.gravity, dtype=np.float64)
         # one 64-byte row per sphere: position, velocity, local time, radius (hsgran._loop S_*)
-        self.state = _aligned_rows(n, ev.S_WIDTH)
-        self.pos = self.state[:, ev.S_X:ev.S_X + 3]
-        self.vel = self.state[:, ev.S_V:ev.S_V + 3]
-        self.t_loc = self.state[:, ev.S_T]
-        self.radius = self.state[:, ev.S_R]
+        self.state = _aligned_rows(n, es.S_WIDTH)
+        self.pos = self.state[:, es.S_X:es.S_X + 3]
+        self.vel = self.state[:, es.S_V:es.S_V + 3]
+        self.t_loc = self.state[:, es.S_T]
+        self.radius = self.state[:, es.S_R]
         self.pos[:] = scene.position
         self.vel[:] = scene.velocity
         self.radius[:] = scene.radius
@@ -330,14 +334,14 @@ class Simulation:
         self.ev_pcount = rec["ev_pcount"][:n + 1]
         self.calendar = new_calendar(n + 1, rec["where"][:n + 1], rec["qnext"][:n + 1],
                                      rec["qprev"][:n + 1], buckets=large)
-        self.fsc = np.zeros(ev.F_SIZE)
-        self.fsc[ev.F_FRAME_DT] = scene.frame_interval
-        self.fsc[ev.F_LANDING_SPEED] = scene.effective_landing_speed
-        self.fsc[ev.F_CHI] = (CONVENTION_A if scene.rolling_convention == "A" else CONVENTION_B)
-        self.fsc[ev.F_TC_TIME] = scene.tc_time
-        self.isc = np.zeros(ev.I_SIZE, dtype=np.int64)
-        self.isc[ev.I_COLLAPSED] = -1
-        self.isc[ev.I_PEND_A] = self.isc[ev.I_PEND_B] = self.isc[ev.I_PEND_LAYER] = -1
+        self.fsc = np.zeros(es.F_SIZE)
+        self.fsc[es.F_FRAME_DT] = scene.frame_interval
+        self.fsc[es.F_LANDING_SPEED] = scene.effective_landing_speed
+        self.fsc[es.F_CHI] = (CONVENTION_A if scene.rolling_convention == "A" else CONVENTION_B)
+        self.fsc[es.F_TC_TIME] = scene.tc_time
+        self.isc = np.zeros(es.I_SIZE, dtype=np.int64)
+        self.isc[es.I_COLLAPSED] = -1
+        self.isc[es.I_PEND_A] = self.isc[es.I_PEND_B] = self.isc[es.I_PEND_LAYER] = -1
         self.counts = np.zeros(len(ev.EVENT_NAMES), dtype=np.int64)
         self.rec = np.zeros(REC_SIZE)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
@@ -355,7 +359,7 @@ class Simulation:
         # the frame tick at t = 0 goes first among simultaneous entries (lowest sequence number)
         self.ev_t[n] = 0.0
         self.ev_seq[n] = 0
-        self.isc[ev.I_SEQ] = 1
+        self.isc[es.I_SEQ] = 1
         # the array groups of hsgran._loop (see its module notes); the tuples hold references,
         # so the compiled code updates these arrays in place. The loop sees the per-sphere
         # record fields m ≥ FIELD_MIN long (the attributes above are the first n entries).
@@ -386,18 +390,18 @@ class Simulation:
 
         # compile (or load from the cache) now, so run() times only the run: with t_end < 0
         # the loop returns before touching any event
-        self.fsc[ev.F_T_END] = -1.0
+        self.fsc[es.F_T_END] = -1.0
         self._call(1)
 
     @property
     def time(self) -> float:
         """Time of the last processed event [s]."""
-        return float(self.fsc[ev.F_T_CUR])
+        return float(self.fsc[es.F_T_CUR])
 
     @property
     def collisions(self) -> int:
         """Collisions (pair and wall events) executed so far."""
-        return int(self.isc[ev.I_N_EVENTS])
+        return int(self.isc[es.I_N_EVENTS])
 
     def state_at(self, t: float):
         """Positions [m] and velocities [m/s] of all spheres at time ``t`` ≥ the last event."""
@@ -439,19 +443,21 @@ class Simulation:
     def collision_loss(self) -> float:
         """Energy the collision model took so far [J] (part of :meth:`dissipated_energy`;
         hops count negative)."""
-        return float(self.fsc[ev.F_DISSIPATED])
+        return float(self.fsc[es.F_DISSIPATED])
 
     def dissipated_energy(self, t: float | None = None) -> float:
         """Energy dissipated since t = 0, up to ``t`` [J]: the initial mechanical energy minus
         that at ``t`` (see :class:`FrameBlock`)."""
         return self.energy0 - self.mechanical_energy(t)
 
-    def _call(self, max_events: int) -> int:
+    def _call(self, max_collisions: int) -> int:
+        """Run the compiled loop for at most ``max_collisions`` collisions and at most
+        :data:`EVENTS_PER_CALL` events of any kind."""
         return ev.run_loop(*self._groups, self.pair_table, self.fsc, self.isc, self.counts,
-                           max_events, self.rec, self.flags)
+                           max_collisions, EVENTS_PER_CALL, self.rec, self.flags)
 
     def _frame_block(self) -> FrameBlock | None:
-        f = int(self.isc[ev.I_N_FRAMES])
+        f = int(self.isc[es.I_N_FRAMES])
         if f == 0:
             return None
         pos = self.fr_pos[:f].copy()
@@ -461,16 +467,16 @@ class Simulation:
         dissipated = self.energy0 - _mechanical(kin_t, kin_r, pot)
         step = np.arange(self._frames_emitted, self._frames_emitted + f, dtype=np.int64)
         self._frames_emitted += f
-        self.isc[ev.I_N_FRAMES] = 0
+        self.isc[es.I_N_FRAMES] = 0
         return FrameBlock(step, self.fr_time[:f].copy(), pos, vel, omg, kin_t, kin_r, pot,
                           dissipated, self.fr_ms[:f].copy())
 
     def _event_block(self) -> EventBlock | None:
-        m = int(self.isc[ev.I_N_LOG])
+        m = int(self.isc[es.I_N_LOG])
         if m == 0:
             return None
         f, i = self.log_f[:m], self.log_i[:m]
-        self.isc[ev.I_N_LOG] = 0
+        self.isc[es.I_N_LOG] = 0
         self._events_emitted += m
         return EventBlock(f[:, 0].copy(), i[:, 0].astype(np.int8), i[:, 1].copy(),
                           i[:, 2].copy(), f[:, 1].copy(), f[:, 2].copy(), f[:, 3].copy(),
@@ -492,7 +498,7 @@ class Simulation:
             SimulationError: frames or log entries are still buffered (they belong to the
                 observers before a checkpoint can describe what they have received).
         """
-        if self.isc[ev.I_N_FRAMES] or self.isc[ev.I_N_LOG]:
+        if self.isc[es.I_N_FRAMES] or self.isc[es.I_N_LOG]:
             raise SimulationError("checkpoint with buffered frames or events: flush them first")
         return Checkpoint({k: a.copy() for k, a in self._state_arrays().items()},
                           self.time, self._frames_emitted, self._events_emitted)
@@ -568,7 +574,7 @@ class Simulation:
             checkpoint_wall: ... and whenever this much wall time [s] has passed since the
                 last one (``None``: not by wall time). A checkpoint is also handed over when the
                 run reaches ``until`` and when ``stop`` ends it.
-            stop: Called between compiled calls (at most :data:`EVENTS_PER_CALL` collisions
+            stop: Called between compiled calls (at most :data:`EVENTS_PER_CALL` events
                 apart); when it returns True the run flushes, hands over a checkpoint and
                 returns with ``interrupted`` set.
 
@@ -600,7 +606,7 @@ class Simulation:
                     if budget <= 0:
                         break
                 # a call ends at the next checkpoint time; cutting the run there changes nothing
-                self.fsc[ev.F_T_END] = min(t_end, t_ck)
+                self.fsc[es.F_T_END] = min(t_end, t_ck)
                 status = self._call(budget)
                 if status in (ev.STATUS_FRAMES_FULL, ev.STATUS_LOG_FULL):
                     self._flush(observers)
@@ -608,12 +614,12 @@ class Simulation:
                     bar.n = min(self.time, t_end)
                     bar.set_postfix_str(f"{self.collisions:,} collisions", refresh=True)
                 if status == ev.STATUS_COLLAPSE:
-                    i = int(self.isc[ev.I_COLLAPSED])
+                    i = int(self.isc[es.I_COLLAPSED])
                     raise SimulationError(
-                        f"sphere {i} had more than {ev.MAX_ZERO_TIME_EVENTS} collisions without "
+                        f"sphere {i} had more than {MAX_ZERO_TIME_EVENTS} collisions without "
                         f"time advancing at t = {self.time:.9g} s (inelastic collapse)")
                 if status == ev.STATUS_DONE and t_ck >= t_end:
-                    self.fsc[ev.F_T_CUR] = max(self.time, t_end)
+                    self.fsc[es.F_T_CUR] = max(self.time, t_end)
                     finished = True
                     break
                 if stop is not None and stop():

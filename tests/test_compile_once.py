@@ -11,7 +11,7 @@ from pathlib import Path
 import numba
 import pytest
 
-from hsgran import _loop
+from hsgran import _flight, _loop, _predict, _settling
 from hsgran.engine import Simulation
 from hsgran.scene import load_scene
 
@@ -25,11 +25,12 @@ def test_every_scene_uses_the_same_compiled_loop():
                       ("sphere_on_plate", True), ("falling_box", False)):
         sim = Simulation(load_scene(SCENARIOS / f"{name}.toml"), log_events=log)
         sim.run(until=0.01)
-    kernels = {name: obj for name, obj in vars(_loop).items()
+    kernels = {name: obj for module in (_loop, _predict, _flight, _settling)
+               for name, obj in vars(module).items()
                if isinstance(obj, numba.core.registry.CPUDispatcher)
-               and obj.py_func.__module__ == _loop.__name__}
-    assert {"_run_loop", "run_loop_gravity", "run_loop_free", "init", "_predict_fn",
-            "_enter_plane"} <= set(kernels)
+               and obj.py_func.__module__ == module.__name__}
+    assert {"_run_loop", "run_loop_gravity", "run_loop_free", "init", "predict_fn",
+            "enter_plane", "settle", "wake_sleepers"} <= set(kernels)
     # the loop's gravity switch is a compile-time constant: one compile with, one without (none
     # here when both callers came from the on-disk cache)
     loops = [sig for sig in kernels.pop("_run_loop").signatures if not large_layout(sig)]

@@ -6,7 +6,7 @@ import numba
 import numpy as np
 import pytest
 
-from hsgran._loop import LAYER_MIN_CELLS
+from hsgran._predict import LAYER_MIN_CELLS
 from hsgran.engine import Simulation
 from hsgran.scene import load_scene, parse_scene
 

@@ -22,8 +22,6 @@ MAX_FUNCTION_LINES = 150
 #: its split removes them, and then this list must be emptied (the test fails on an entry that
 #: is no longer over long). Keys are ``module:qualified name``, values their length when listed.
 PENDING_ISSUE_24 = {
-    "_loop:_predict": 159,
-    "_loop:_run_loop": 444,
     "engine:Simulation.__init__": 164,
 }
 

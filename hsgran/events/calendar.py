@@ -42,7 +42,7 @@ import math
 import numpy as np
 
 from hsgran._jit import njit, prefetch
-from hsgran.events.queue import heap_change, heap_push, heap_remove, new_heap
+from hsgran.events.queue import ARITY, heap_change, heap_push, heap_remove, new_heap
 
 #: Entries meant to pass through each bucket (the width follows from the event rate). A few
 #: keeps the heap of the current bucket tiny and the lists short.
@@ -290,6 +290,22 @@ def _prefetch_ahead(slot, cal, key_time):
         if b >= 0:
             prefetch(key_time, b)
             prefetch(qnext, b)
+
+
+@njit(inline="always")
+def calendar_runner_up(cal):
+    """The entry likely to come after the top one, or −1: the earliest of the top's children
+    in the heap of the current bucket (a guess, for prefetching; the entry after the top may
+    also be deeper in the heap, or in the next bucket)."""
+    heap, key_t = cal[0], cal[2]
+    last = min(ARITY, cal[7][Q_SIZE] - 1)
+    if last < 1:
+        return -1
+    best = 1
+    for c in range(2, last + 1):
+        if key_t[c] < key_t[best]:
+            best = c
+    return heap[best]
 
 
 @njit(inline="always")

@@ -35,12 +35,14 @@ def test_every_kind_has_a_plain_int_constant_and_a_name():
         assert "\n" not in k.description
 
 
-def test_the_compiled_loop_re_exports_the_same_constants():
-    from hsgran import _loop
+def test_the_compiled_loop_uses_the_same_constants():
+    from hsgran import _loop, _predict, _settling
 
     assert _loop.EVENT_NAMES == EVENT_NAMES
-    for k in KINDS:
-        assert getattr(_loop, f"EV_{k.name.upper()}") == k.code
+    for module in (_loop, _predict, _settling):
+        for k in KINDS:
+            name = f"EV_{k.name.upper()}"
+            assert getattr(module, name, k.code) == k.code, (module.__name__, name)
 
 
 def doc_kind_rows():

@@ -1,0 +1,231 @@
+"""One sphere's flight and motion state, and the checks of one contact (layer 5; the compiled
+event loop's kernels, used by :mod:`hsgran._predict`, :mod:`hsgran._settling` and
+:mod:`hsgran._loop`).
+
+- where a sphere is at a time (its stored state plus its constant acceleration) and moving its
+  stored state there (delayed states, DynamO);
+- the gap to a plane, and the on-plane motion states (MODEL §5.3 through
+  :func:`hsgran.onplane.plane_segment`): entering, leaving and stopping on a plane;
+- the clock's rounding: what counts as no progress in time (the collapse guard's count);
+- the re-check of a popped collision (still approaching?) and the TC model's elastic row.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from hsgran._jit import njit
+from hsgran._state import F_CHI, F_TC_TIME, S_R, S_T, S_V
+from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
+from hsgran.motion import NEVER, approach_noise, flight_position
+from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
+
+#: A sphere whose gap to a plane is within this fraction of its radius counts as touching it
+#: [-]: a gap of 1e-10 R is far above the rounding of a position dotted with a normal (~1e-16 of
+#: the coordinates, ~1e-14 R for millimetre spheres in a 0.1 m box) and far below the 1e-9 R
+#: overlap a run must stay under. The same value as motion.TOUCHING_REL, which is a fraction of
+#: σ² for pairs; this one is a fraction of the radius for planes.
+PLANE_TOUCHING_REL = 1e-10
+
+#: A sphere whose event happens less than NO_PROGRESS_REL × max(1 s, t) after its previous one
+#: made no progress in time (collapse guard, jams, wedges). In a cage of touching bodies the
+#: time between collisions is the round-off of the predictions, a few ulps of the clock and
+#: not always zero: a sphere sliding at 1 mm/s in a pocket of three resting spheres met them
+#: 4.4e-16 s apart at t = 0.28 s (8 ulps), and with a bound of 4e-16 its run went on without
+#: end. 1e-13 is ~450 ulps at t = 1 s and 1e7 times shorter than the contact duration of
+#: millimetre spheres (1e4 times for micron spheres): no two real collisions are that close.
+NO_PROGRESS_REL = 1e-13
+#: The retry limit of pop–re-check–execute: consecutive events of one sphere that do not advance
+#: its clock (re-check failures, collisions) after which the run stops with an error instead of
+#: looping forever (inelastic collapse or a rounding loop). Legitimate simultaneous events (a
+#: Newton's cradle, a symmetric three-body hit) involve a sphere a handful of times.
+MAX_ZERO_TIME_EVENTS = 1000
+#: A sphere whose gap to a plane is within this fraction of its radius at t = 0 starts on the
+#: plane: the scene check accepts touching spheres written in decimal to 1e-12 (hsgran.scene
+#: CONTACT_TOLERANCE), so the same bound.
+START_GAP_REL = 1e-12
+
+
+@njit(inline="always")
+def state_at(st, acc, j, t, grav_on):
+    """Position and velocity of sphere j at time t (its stored state is at ``st[j, S_T]``).
+
+    With gravity every sphere moves with its own constant acceleration ``acc[j]``: gravity in
+    flight, the on-plane value while sliding or rolling (hsgran.onplane), zero at rest."""
+    dt = t - st[j, S_T]
+    if grav_on:
+        return (flight_position(st[j, 0], st[j, 3], acc[j, 0], dt),
+                flight_position(st[j, 1], st[j, 4], acc[j, 1], dt),
+                flight_position(st[j, 2], st[j, 5], acc[j, 2], dt),
+                st[j, 3] + acc[j, 0] * dt, st[j, 4] + acc[j, 1] * dt,
+                st[j, 5] + acc[j, 2] * dt)
+    return (st[j, 0] + st[j, 3] * dt, st[j, 1] + st[j, 4] * dt, st[j, 2] + st[j, 5] * dt,
+            st[j, 3], st[j, 4], st[j, 5])
+
+
+@njit(inline="always")
+def advance(st, acc, omg, alpha, j, t, grav_on, rotation):
+    """Move sphere j's stored state (and its spin, which changes only on a plane) to time t."""
+    if grav_on and rotation:
+        dt = t - st[j, S_T]
+        omg[j, 0] += alpha[j, 0] * dt
+        omg[j, 1] += alpha[j, 1] * dt
+        omg[j, 2] += alpha[j, 2] * dt
+    x, y, z, u, v, w = state_at(st, acc, j, t, grav_on)
+    st[j, 0] = x
+    st[j, 1] = y
+    st[j, 2] = z
+    st[j, 3] = u
+    st[j, 4] = v
+    st[j, 5] = w
+    st[j, S_T] = t
+
+
+@njit(inline="always")
+def min_image(d, k, box_len, periodic):
+    """Nearest periodic image of a separation along axis k. Stored positions stay within one
+    box length of the box (wrapped at every cell exit), so one shift is always enough."""
+    if periodic[k]:
+        half = 0.5 * box_len[k]
+        if d > half:
+            return d - box_len[k]
+        if d < -half:
+            return d + box_len[k]
+    return d
+
+
+@njit(inline="always")
+def note_progress(p, t, st, zstreak):
+    """Count consecutive events of sphere p that do not advance its clock (collapse guard)."""
+    if t - st[p, S_T] <= NO_PROGRESS_REL * max(1.0, t):
+        zstreak[p] += 1
+    else:
+        zstreak[p] = 0
+
+
+@njit(inline="always")
+def pressed(i, w, st, walls, gravity):
+    """(normal load per unit mass g_n = −g·n [m/s²], normal velocity v·n [m/s]) of sphere i
+    against plane w."""
+    planes_n = walls.planes_n
+    gn = -(gravity[0] * planes_n[w, 0] + gravity[1] * planes_n[w, 1]
+           + gravity[2] * planes_n[w, 2])
+    vn = st[i, 3] * planes_n[w, 0] + st[i, 4] * planes_n[w, 1] + st[i, 5] * planes_n[w, 2]
+    return gn, vn
+
+
+@njit(inline="always")
+def halt(p, st, omg, rotation):
+    """Sphere p stops: zero velocity and spin."""
+    for k in range(3):
+        st[p, S_V + k] = 0.0
+        if rotation:
+            omg[p, k] = 0.0
+
+
+@njit
+def leave_plane(i, flight, dyn, gravity, rotation):
+    """Sphere i flies again (a collision moved it): acceleration g, constant spin."""
+    acc, mstate, seg_end, seg_code = flight.acc, flight.mstate, flight.seg_end, flight.seg_code
+    alpha = dyn.alpha
+    mstate[i] = MS_FLIGHT
+    seg_end[i] = NEVER
+    seg_code[i] = END_NONE
+    for k in range(3):
+        acc[i, k] = gravity[k]
+        if rotation:
+            alpha[i, k] = 0.0
+
+
+@njit
+def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                 rotation):
+    """Put sphere i on plane w at time t (or start its next segment there; ``snap`` is the
+    transition that ended the last one): MODEL §5.3 through hsgran.onplane.plane_segment."""
+    st, acc, mstate = flight.st, flight.acc, flight.mstate
+    mplane, seg_end, seg_code = flight.mplane, flight.seg_end, flight.seg_code
+    omg, mat, alpha, seg_dir = dyn.omg, dyn.mat, dyn.alpha, dyn.seg_dir
+    planes_p, planes_n, planes_mat = walls.planes_p, walls.planes_n, walls.planes_mat
+    nx = planes_n[w, 0]
+    ny = planes_n[w, 1]
+    nz = planes_n[w, 2]
+    # exactly on the plane, moving along it: the normal gap and speed left are round-off or
+    # (on landing) the rebound given up, bounded by the landing speed
+    gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)
+    vn = st[i, 3] * nx + st[i, 4] * ny + st[i, 5] * nz
+    st[i, 0] -= gap * nx
+    st[i, 1] -= gap * ny
+    st[i, 2] -= gap * nz
+    st[i, 3] -= vn * nx
+    st[i, 4] -= vn * ny
+    st[i, 5] -= vn * nz
+    row = pair_table[mat[i], planes_mat[w]]
+    mu_s = row[P_MU_S] if friction else 0.0
+    mu_r = row[P_MU_R] if rolling else 0.0
+    wv = omg[i] if rotation else omg[0]
+    state, ax, ay, az, alx, aly, alz, dur, code = plane_segment(
+        st[i, S_V:S_V + 3], wv, planes_n[w], gravity, st[i, S_R], SOLID_SPHERE_INERTIA, mu_s,
+        mu_r, fsc[F_CHI], snap, seg_dir[i])
+    mstate[i] = state
+    mplane[i] = w
+    acc[i, 0] = ax
+    acc[i, 1] = ay
+    acc[i, 2] = az
+    if rotation:
+        alpha[i, 0] = alx
+        alpha[i, 1] = aly
+        alpha[i, 2] = alz
+    seg_end[i] = t + dur
+    seg_code[i] = code
+
+
+@njit
+def stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                   rotation):
+    """Sphere p, on its plane, stops there: at rest, or, on a slope too steep for rest, starting
+    a new segment from standstill."""
+    halt(p, flight.st, dyn.omg, rotation)
+    enter_plane(p, np.int64(flight.mplane[p]), t, np.int64(END_NONE), flight, dyn, walls, gravity,
+                 pair_table, fsc, friction, rolling, rotation)
+    flight.counter[p] += 1
+
+
+@njit(inline="always")
+def plane_gap(x, y, z, r, planes_p, planes_n, w):
+    """Gap [m] between a sphere of radius r [m] centred at (x, y, z) [m] and plane w (negative:
+    overlap)."""
+    return ((x - planes_p[w, 0]) * planes_n[w, 0] + (y - planes_p[w, 1]) * planes_n[w, 1]
+            + (z - planes_p[w, 2]) * planes_n[w, 2] - r)
+
+
+#: Restitution of a collision the TC model makes elastic.
+TC_RESTITUTION = 1.0
+
+
+@njit(inline="always")
+def tc_row(row, t, t1, t2, fsc, row_tc):
+    """(pair row, made elastic) for a collision at t of bodies last hit at t1, t2 [s]: ``row``
+    itself, or, when one of them collided less than the TC time ago, a copy with a fixed
+    restitution of 1 in ``row_tc`` (TC model, Luding & McNamara 1998, through MODEL §3.9's
+    fixed-restitution bypass; the tangential model is unchanged)."""
+    tc = fsc[F_TC_TIME]
+    if tc > 0.0 and (t - t1 < tc or t - t2 < tc):
+        for k in range(row.shape[0]):  # (a slice copy would need numba's allocator)
+            row_tc[k] = row[k]
+        row_tc[P_E_FIXED] = TC_RESTITUTION
+        return row_tc, True
+    return row, False
+
+
+@njit(inline="always")
+def approaching(i, j, dx, dy, dz, sigma, st):
+    """Whether touching spheres i, j (r = x_i − x_j = (dx, dy, dz) [m]) approach by more than
+    rounding: the re-check matching predict's test (motion.approach_noise)."""
+    rw = 0.0
+    v_sum = 0.0
+    x_sum = 0.0
+    for k, rk in enumerate((dx, dy, dz)):
+        rw += rk * (st[i, S_V + k] - st[j, S_V + k])
+        v_sum += abs(st[i, S_V + k]) + abs(st[j, S_V + k])
+        x_sum += abs(st[i, k]) + abs(st[j, k])
+    return -rw > approach_noise(sigma, v_sum, x_sum)

@@ -1,0 +1,687 @@
+"""Enduring contact under gravity: the rules that end zero-time sequences of collisions in
+rest (layer 5; compiled kernels used by :mod:`hsgran._loop`). All of them are hsgran's own
+choices [OURS]; what each costs in accuracy is in docs/enduring-contact.md.
+
+The event loop reaches them through four entry points, and only with gravity (the loop
+compiled without gravity has none of this code):
+
+- :func:`settle` — a slow meeting of two spheres ends in rest instead of a collision: a sphere
+  lands on a plane it lies on, falls asleep on a sphere at rest, or two slow spheres on their
+  supports both stop;
+- :func:`collide_pair` — a sphere–sphere collision with supports: backing by a plane or by the
+  sphere a sleeper rests on, hops of pressed pairs, resting spheres held where they are, waking
+  the sleepers of a sphere set moving, and stopping a sphere wedged between immovable bodies;
+- :func:`lands_before_wall` — a sphere meeting a plane too slowly to bounce stays on it;
+- :func:`collide_wall` — a sphere–plane collision with backing by another plane, landing after
+  a slow rebound and the wedge stop.
+
+The next step for dense scenes (a multi-contact treatment in place of these pairwise rules)
+replaces this module behind the same entry points.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hsgran._flight import (
+    PLANE_TOUCHING_REL,
+    advance,
+    approaching,
+    enter_plane,
+    halt,
+    leave_plane,
+    min_image,
+    plane_gap,
+    pressed,
+    stop_on_plane,
+    tc_row,
+)
+from hsgran._jit import njit
+from hsgran._predict import axis_cells, reschedule_fn
+from hsgran._state import (
+    F_LANDING_SPEED,
+    F_TC_TIME,
+    FL_ADHESION,
+    FL_FRICTION,
+    FL_GRAVITY,
+    FL_PLASTICITY,
+    FL_ROLLING,
+    FL_ROTATION,
+    S_R,
+    S_V,
+)
+from hsgran.contact.model import (
+    REC_E_N,
+    REC_ENERGY_LOST,
+    REC_J_N,
+    REC_J_T,
+    REC_REGIME,
+    REC_STAGE,
+    resolve,
+)
+from hsgran.events.kinds import EV_HOP
+from hsgran.motion import NEVER
+from hsgran.onplane import END_NONE, MS_FLIGHT, MS_REST
+
+#: Events of one sphere in succession, each less than the TC time after the previous one (or
+#: at the same instant), after which it counts as jammed: in an enduring contact with several
+#: bodies at once (see _falls_asleep). Far above the handful of collisions of a legitimate
+#: simultaneous hit, far below the collapse guard.
+JAM_EVENTS = 64
+#: Events of one sphere in succession without its clock advancing (NO_PROGRESS_REL) after which
+#: a collision with an immovable body (a plane, or a sphere the collision leaves at rest) stops
+#: it: see _wedge_stop. Above JAM_EVENTS, so that a jammed sphere that can fall
+#: asleep on an upward contact does so first; far below the collapse guard
+#: (MAX_ZERO_TIME_EVENTS).
+WEDGE_EVENTS = 128
+#: A jammed sphere may fall asleep on a resting sphere it meets if the contact normal points
+#: upwards at all, so that gravity presses it onto that sphere: cos ≥ 1e-6 to the vertical,
+#: far above the rounding of the direction [-]. (1e-3 left a sphere 0.05° above the equator of
+#: a sleeper, wedged between it and a side wall, hopping off it into the wall for ever.)
+JAM_SUPPORT_COS = 1e-6
+#: A sphere can fall asleep on another only if the contact normal is within 60° of the upward
+#: vertical (cos 60° = 0.5): it then lies on top of it, as in a pile, where a sphere in the
+#: pocket of three others touches each at ~35° from the vertical; a sideways touch is a
+#: collision like any other.
+SUPPORT_COS = 0.5
+
+
+@njit(inline="always")
+def _can_support(p, st, mstate, mplane, v_sleep):
+    """Sphere p can carry a sleeper: at rest (on a plane or asleep itself), or on a plane and
+    slower than ``v_sleep`` (it is then brought to rest first)."""
+    if mstate[p] == MS_REST:
+        return True
+    if mstate[p] == MS_FLIGHT or mplane[p] < 0:
+        return False
+    return st[p, 3] ** 2 + st[p, 4] ** 2 + st[p, 5] ** 2 <= v_sleep * v_sleep
+
+
+@njit
+def _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_sleep, jam_i, jam_j):
+    """Which of i, j (n = unit vector from j to i) falls asleep on the other, or −1.
+
+    A sphere falls asleep when it meets from above a sphere that is at rest (on a plane or
+    itself asleep), or on a plane and slower than ``v_sleep`` (the landing speed), with a
+    relative speed at most ``v_sleep``: what a collision would have done is a rebound slower
+    than that. This is hsgran's remedy for sphere–sphere inelastic collapse in piles [OURS,
+    after DynamO's sleeping particles]; it gives up at most ½ m v_sleep² per sphere stopped,
+    and the support is not pushed.
+
+    "From above" is within 60° of the vertical (SUPPORT_COS), or, for a jammed sphere
+    (``jam_i``/``jam_j``: JAM_EVENTS rapid events in succession), any upward direction: a
+    sphere wedged between a wall and a sphere it leans on, or in a pocket of spheres on a
+    plate, rests against several bodies at once, which the hard-sphere loop can only see as an
+    endless buzz of (TC-elastic) collisions [OURS]."""
+    g = math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    if g == 0.0:
+        return -1
+    up = -(nx * gravity[0] + ny * gravity[1] + nz * gravity[2]) / g  # cos(angle(n, up))
+    dvx = st[i, 3] - st[j, 3]
+    dvy = st[i, 4] - st[j, 4]
+    dvz = st[i, 5] - st[j, 5]
+    if dvx * dvx + dvy * dvy + dvz * dvz > v_sleep * v_sleep:
+        return -1
+    if (mstate[i] != MS_REST and up >= (JAM_SUPPORT_COS if jam_i else SUPPORT_COS)
+            and _can_support(j, st, mstate, mplane, v_sleep)):
+        return i
+    if (mstate[j] != MS_REST and -up >= (JAM_SUPPORT_COS if jam_j else SUPPORT_COS)
+            and _can_support(i, st, mstate, mplane, v_sleep)):
+        return j
+    return -1
+
+
+@njit(inline="always")
+def note_rapid(p, t, t_last, rapid, tc):
+    """Count sphere p's collisions in succession that come less than the TC time ``tc`` [s]
+    after its previous one (jam detection, JAM_EVENTS)."""
+    if t - t_last[p] < tc:
+        rapid[p] += 1
+    else:
+        rapid[p] = 0
+
+
+@njit(inline="always")
+def _holds(p, v0x, v0y, v0z, mstate, zstreak):
+    """Whether sphere p, which met a collision with velocity v0, is immovable for the wedge
+    rule (_wedge_stop): at rest after it, or stopped by the rule at this instant."""
+    return mstate[p] == MS_REST or (zstreak[p] >= WEDGE_EVENTS and v0x == 0.0 and v0y == 0.0
+                                    and v0z == 0.0)
+
+
+@njit
+def _wedge_stop(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                rotation):
+    """Stop sphere p, which has just collided with an immovable body after at least
+    WEDGE_EVENTS events in succession at one instant (NO_PROGRESS_REL), if it moves (in
+    flight, or sliding or rolling on a plane); returns whether it was stopped. Immovable: a
+    plane (planes never move), a sphere the collision leaves at rest, or a sphere stopped
+    here at this instant (it met the collision at standstill); the caller decides (_holds).
+
+    Such a sequence is a sphere wedged between immovable bodies: between a side wall and a
+    sleeper leaning over it, on the floor in a pocket of a wall and resting spheres, or in a
+    chain of spheres between a wall and a sleeper (seen in a 400-sphere pour at e = 0.8: the
+    spheres at its ends stop against the wall and the sleeper, the ones between against
+    them). The TC model makes its collisions elastic, so the bodies send it back and forth at
+    the same instant without end: with sticking friction the impulses shrink geometrically
+    (by ~0.9 a collision, seen in 200-sphere pours), without friction they need not shrink at
+    all. A sphere held by bodies at rest comes to rest relative to them (e = 0, the limit of
+    an enduring contact), so it is stopped at once [OURS]: in flight, velocity and spin zero,
+    and gravity then decides what comes next (it falls out of a wedge that opens downwards,
+    or, pressed into an upward contact, falls asleep there, _falls_asleep); on a plane, at
+    rest there (stop_on_plane; on a slope too steep for rest it slides on from standstill).
+    What is given up is the kinetic energy it had left, which ``dissipated_energy`` counts;
+    the run summary's "wedge" count says how often, and the event log has an entry for each
+    stop (EV_WEDGE). A zero-time loop that meets no immovable body is left to the collapse
+    guard."""
+    st, omg, mstate = flight.st, dyn.omg, flight.mstate
+    if dyn.zstreak[p] < WEDGE_EVENTS or mstate[p] == MS_REST or (
+            st[p, 3] == 0.0 and st[p, 4] == 0.0 and st[p, 5] == 0.0
+            and (not rotation or (omg[p, 0] == 0.0 and omg[p, 1] == 0.0 and omg[p, 2] == 0.0))):
+        return False  # nothing to stop
+    if mstate[p] == MS_FLIGHT:
+        halt(p, st, omg, rotation)
+    else:
+        stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
+                       rotation)
+    return True
+
+
+@njit(inline="always")
+def _both_slow_on_supports(i, j, st, mstate, v_land):
+    """Whether spheres i and j are both on a support (a plane, or asleep on a sphere) and both
+    slower than the landing speed ``v_land`` [m/s]. When such spheres meet they both stop
+    where they are (on a steep incline the plane then sets them moving again) [OURS]: the
+    sphere-against-sphere counterpart of landing, at a cost of at most ½ m v_land² per sphere
+    stopped. As a collision, a slow sphere sliding into a resting one that had just taken a
+    sleeper made a zero-time chain: the collision moved the support, the sleeper stopped it
+    again, and the slider met it again, ever slower."""
+    if mstate[i] == MS_FLIGHT or mstate[j] == MS_FLIGHT:
+        return False
+    vi2 = st[i, 3] * st[i, 3] + st[i, 4] * st[i, 4] + st[i, 5] * st[i, 5]
+    vj2 = st[j, 3] * st[j, 3] + st[j, 4] * st[j, 4] + st[j, 5] * st[j, 5]
+    return vi2 <= v_land * v_land and vj2 <= v_land * v_land
+
+
+@njit
+def _fall_asleep(a, b, flight, dyn, rotation):
+    """Sphere a rests on sphere b from now on: zero velocity, spin and acceleration."""
+    st, acc, mstate = flight.st, flight.acc, flight.mstate
+    mplane, seg_end = flight.mplane, flight.seg_end
+    halt(a, st, dyn.omg, rotation)
+    for k in range(3):
+        acc[a, k] = 0.0
+        if rotation:
+            dyn.alpha[a, k] = 0.0
+    mstate[a] = MS_REST
+    mplane[a] = -2 - b  # the support: sphere b
+    seg_end[a] = NEVER
+
+
+@njit
+def wake_sleepers(s, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation):
+    """Sphere s was at rest and has been hit: every sphere asleep on it, and on those, falls."""
+    st, counter, acc = flight.st, flight.counter, flight.acc
+    mstate, mplane = flight.mstate, flight.mplane
+    omg, alpha = dyn.omg, dyn.alpha
+    gravity, box_len, periodic = space
+    ncell, cell, head, nxt, ac, ah, stack = grid.ncell, grid.cell, grid.head, grid.nxt, grid.ac, \
+        grid.ah, grid.stack
+    top = 0
+    stack[top] = s
+    top += 1
+    while top > 0:
+        top -= 1
+        b = stack[top]
+        mx = axis_cells(cell[b, 0], ncell[0], box_len[0], periodic[0], 0, ac, ah)
+        my = axis_cells(cell[b, 1], ncell[1], box_len[1], periodic[1], 1, ac, ah)
+        mz = axis_cells(cell[b, 2], ncell[2], box_len[2], periodic[2], 2, ac, ah)
+        for x in range(mx):
+            for y in range(my):
+                for z in range(mz):
+                    q = np.int64(head[(ac[0, x] * ncell[1] + ac[1, y]) * ncell[2] + ac[2, z]])
+                    while q >= 0:
+                        if mstate[q] == MS_REST and mplane[q] == -2 - b:
+                            advance(st, acc, omg, alpha, q, t, grav_on, rotation)
+                            leave_plane(q, flight, dyn, gravity, rotation)
+                            mplane[q] = -1
+                            counter[q] += 1
+                            reschedule_fn(q, t, flight, walls, space, grid, sched, isc,
+                                           grav_on)
+                            stack[top] = q
+                            top += 1
+                        q = np.int64(nxt[q])
+
+
+#: Two spheres pressed into planes with support cosines c_i, c_j both ~1 (c_i² + c_j² ≥ 2 − this)
+#: would have no mobility along the contact normal: then neither is treated as backed.
+SUPPORT_EPS = 1e-9
+
+
+@njit(inline="always")
+def _support_normal(p, st, mstate, mplane, planes_n, box_len, periodic):
+    """Unit normal N [-] of what backs sphere p: its plane's normal, or, for a sphere asleep on
+    sphere b, the direction from b to p; (0, 0, 0) for a sphere in flight."""
+    if mstate[p] == MS_FLIGHT:
+        return 0.0, 0.0, 0.0
+    w = mplane[p]
+    if w >= 0:
+        return planes_n[w, 0], planes_n[w, 1], planes_n[w, 2]
+    b = -2 - w
+    if b < 0:
+        return 0.0, 0.0, 0.0
+    dx = min_image(st[p, 0] - st[b, 0], 0, box_len, periodic)
+    dy = min_image(st[p, 1] - st[b, 1], 1, box_len, periodic)
+    dz = min_image(st[p, 2] - st[b, 2], 2, box_len, periodic)
+    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+    return dx / d, dy / d, dz / d
+
+
+@njit(inline="always")
+def _support_cos(sx, sy, sz, bx, by, bz):
+    """How much an impulse along the unit vector s presses a sphere into what backs it (unit
+    normal N = b): c = −s·N if c > 0, else 0.
+
+    A sphere on a plane, or asleep on another sphere, that is hit towards its support is
+    backed by it [OURS, rigid-support limit]: the support takes the part of the impulse along
+    N, so along the contact normal the sphere has the inverse mass (1 − c²)/m. Without this
+    the hit would push it into the support, it would land again at once and be hit again: an
+    endless zero-time cascade."""
+    c = -(sx * bx + sy * by + sz * bz)
+    return c if c > 0.0 else 0.0
+
+
+@njit(inline="always")
+def _backed_velocity(p, v0x, v0y, v0z, jx, jy, jz, bx, by, bz, st, inv_m):
+    """Velocity of a backed sphere p after the impulse J [N s] on it: its support (unit normal
+    b) takes J·b."""
+    jn = jx * bx + jy * by + jz * bz
+    st[p, 3] = v0x + inv_m[p] * (jx - jn * bx)
+    st[p, 4] = v0y + inv_m[p] * (jy - jn * by)
+    st[p, 5] = v0z + inv_m[p] * (jz - jn * bz)
+
+
+@njit(inline="always")
+def _stays_asleep(p, c, st, mstate, mplane, v_sleep):
+    """Whether sphere p, asleep on a sphere and pressed into it (support cosine c > 0), stays
+    asleep with its present velocity: slower than ``v_sleep`` (the landing speed)."""
+    return (mstate[p] == MS_REST and mplane[p] <= -2 and c > 0.0
+            and st[p, 3] ** 2 + st[p, 4] ** 2 + st[p, 5] ** 2 <= v_sleep * v_sleep)
+
+
+@njit(inline="always")
+def _slow_touch_at_rest(p, q, nx, ny, nz, st, mstate, v_sleep):
+    """Whether sphere p is at rest (on a plane or asleep on a sphere) and sphere q meets it
+    (unit normal n from q to p) with a normal approach speed of at most ``v_sleep``."""
+    if mstate[p] != MS_REST:
+        return False
+    vn = ((st[q, 3] - st[p, 3]) * nx + (st[q, 4] - st[p, 4]) * ny
+          + (st[q, 5] - st[p, 5]) * nz)
+    return vn <= v_sleep
+
+
+@njit
+def _after_backed(p, c, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                  rolling, rotation):
+    """Motion state of sphere p after a pair collision (c: its support cosine). A backed sphere
+    on a plane starts a new segment there; a backed sleeper stays asleep if it is left slower
+    than the landing speed (giving up less than ½ m v_land²); any other flies."""
+    st, mstate, mplane = flight.st, flight.mstate, flight.mplane
+    if mstate[p] == MS_FLIGHT:
+        return
+    if c > 0.0 and mplane[p] >= 0:
+        enter_plane(p, np.int64(mplane[p]), t, no_end, flight, dyn, walls, gravity, pair_table,
+                     fsc, friction, rolling, rotation)
+        return
+    if _stays_asleep(p, c, st, mstate, mplane, fsc[F_LANDING_SPEED]):
+        halt(p, st, dyn.omg, rotation)
+        return
+    leave_plane(p, flight, dyn, gravity, rotation)
+    if mplane[p] < -1:
+        mplane[p] = -1  # no longer asleep on a sphere
+
+
+#: Code stored as the normal-model stage of a hop in the event log.
+STAGE_HOP = -1
+
+
+@njit
+def _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, tc):
+    """A hop of touching spheres i, j (unit normal n from j to i) that their accelerations
+    press together and that meet slower than v_hop = a_n t_c / 2 (a_n the pressing relative
+    acceleration [m/s²], t_c the TC time): an enduring sphere–sphere contact, which has no
+    motion state of its own, would otherwise be a zero-time sequence of ever-smaller
+    collisions (or of re-check failures) [OURS]. The normal relative velocity is set to +v_hop,
+    so that they touch again a TC time later; the kinetic energy this adds, at most
+    ½ m_eff v_hop² (~1e-14 J for millimetre steel spheres), is booked as negative dissipation.
+    A sphere given an inverse mass of 0 (one at rest: the loop holds it) is not moved.
+    Returns False (nothing done) when the pair is not pressed together or meets faster."""
+    a_n = ((acc[i, 0] - acc[j, 0]) * nx + (acc[i, 1] - acc[j, 1]) * ny
+           + (acc[i, 2] - acc[j, 2]) * nz)
+    inv_sum = inv_mi + inv_mj
+    if not a_n < 0.0 or inv_sum == 0.0 or tc <= 0.0:
+        return False
+    vn = ((st[i, 3] - st[j, 3]) * nx + (st[i, 4] - st[j, 4]) * ny
+          + (st[i, 5] - st[j, 5]) * nz)
+    v_hop = -0.5 * a_n * tc
+    if vn >= v_hop or -vn > v_hop:
+        return False
+    dv = v_hop - vn
+    m_eff = 1.0 / inv_sum
+    jn = m_eff * dv
+    for k, nk in enumerate((nx, ny, nz)):
+        st[i, S_V + k] += inv_mi * jn * nk
+        st[j, S_V + k] -= inv_mj * jn * nk
+    for k in range(rec.shape[0]):
+        rec[k] = math.nan
+    rec[REC_J_N] = jn
+    rec[REC_J_T] = 0.0
+    rec[REC_E_N] = math.nan
+    rec[REC_STAGE] = STAGE_HOP
+    rec[REC_REGIME] = 0
+    rec[REC_ENERGY_LOST] = -0.5 * m_eff * (v_hop * v_hop - vn * vn)
+    return True
+
+
+@njit
+def _resting_plane(i, st, walls, gravity, v_land):
+    """A plane that sphere i (in flight) touches within rounding while gravity presses it onto
+    it and it moves off or onto it slower than the landing speed ``v_land`` [m/s], or −1. Such
+    a sphere lands there at once: the rebound it would make is a landing's (the normal speed
+    given up is at most v_land) [OURS]. A sphere wedged between neighbours on a plane and
+    hopped off them, slightly upwards, would otherwise meet them again and again before it
+    ever came back to the plane."""
+    planes_p, planes_n = walls.planes_p, walls.planes_n
+    for w in range(planes_p.shape[0]):
+        gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)
+        if gap <= PLANE_TOUCHING_REL * st[i, S_R]:
+            gn, vn = pressed(i, w, st, walls, gravity)
+            if gn > 0.0 and abs(vn) <= v_land:
+                return w
+    return -1
+
+
+SETTLE_NONE = 0  #: the pair collides
+SETTLE_PLANE = 1  #: a sphere lying on a plane landed there
+SETTLE_SLEEP = 2  #: a sphere fell asleep on the other (progress: it cannot repeat until the
+#: support moves, so the collapse guard does not count it)
+SETTLE_STOP = 3  #: both stopped on their supports
+
+
+@njit
+def settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
+            rolling, rotation):
+    """The rules that end a slow meeting of spheres i, j (unit normal n from j to i) in rest
+    instead of a collision, in this order [OURS]:
+
+    1. one of them, in flight, lies on a plane it meets slower than the landing speed
+       (_resting_plane): it lands there first;
+    2. one falls asleep on the other (_falls_asleep; a slow support on a plane is brought to
+       rest first, and if it cannot rest there, a steep incline, they collide);
+    3. both are on supports and slow (_both_slow_on_supports): both stop.
+
+    Returns (rule, sphere, partner): the rule that applied (SETTLE_*, SETTLE_NONE when the
+    pair collides), and the sphere and partner of the event log's landing entry (partner
+    −1 − w for plane w).
+    """
+    st, counter, mstate, mplane = flight.st, flight.counter, flight.mstate, flight.mplane
+    v_land = fsc[F_LANDING_SPEED]
+    no_end = np.int64(END_NONE)
+    for p in (i, j):
+        if mstate[p] == MS_FLIGHT:
+            w = _resting_plane(p, st, walls, gravity, v_land)
+            if w >= 0:
+                enter_plane(p, w, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
+                             friction, rolling, rotation)
+                counter[p] += 1
+                return SETTLE_PLANE, p, -1 - w
+    rapid, zstreak = dyn.rapid, dyn.zstreak
+    sleeper = _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_land,
+                            rapid[i] > JAM_EVENTS or zstreak[i] > JAM_EVENTS,
+                            rapid[j] > JAM_EVENTS or zstreak[j] > JAM_EVENTS)
+    if sleeper >= 0:
+        other = j if sleeper == i else i
+        if mstate[other] != MS_REST:
+            # giving up less than ½ m v_land²
+            stop_on_plane(other, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                           rolling, rotation)
+        if mstate[other] == MS_REST:
+            # the sphere stays on its support, which is not moved
+            _fall_asleep(sleeper, other, flight, dyn, rotation)
+            counter[sleeper] += 1
+            return SETTLE_SLEEP, sleeper, other
+    if _both_slow_on_supports(i, j, st, mstate, v_land):
+        for p in (i, j):
+            if mstate[p] != MS_REST:
+                stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                               rolling, rotation)
+        return SETTLE_STOP, i, j
+    return SETTLE_NONE, -1, 0
+
+
+# ---- the interface the event loop uses (with gravity only) ---------------------------------
+
+@njit(inline="always")
+def _hold(held, c, inv_m, inv_i):
+    """(support cosine, inverse mass, inverse moment of inertia) of a sphere in a pair
+    collision: its own, or zeros for a sphere held where it is (it is not moved)."""
+    if held:
+        return 0.0, 0.0, 0.0
+    return c, inv_m, inv_i
+
+
+@njit(inline="always")
+def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, grid, sched, isc,
+                 pair_table, fsc, rec, counts, flags):
+    """Collide touching spheres i, j (unit normal n from j to i, r = x_i − x_j = (dx, dy, dz)
+    [m]) under gravity, with the enduring-contact rules [OURS, docs/enduring-contact.md]: a
+    sphere pressed into its support (a plane, or a sphere it sleeps on) is backed by it; a
+    pair pressed together and meeting slowly hops (:func:`_hop`); a resting sphere met slowly
+    is held where it is; a sleeper the collision leaves asleep is treated as immovable; after
+    it, backed spheres stay on their planes, sleepers of a sphere set moving fall, and a
+    sphere wedged in a zero-time sequence against an immovable body is stopped
+    (:func:`_wedge_stop`).
+
+    Returns:
+        (hit, tc_on, wedged_a, wedged_b): whether the collision was executed (False: the
+        re-check found the pair not approaching, nothing changed), whether the TC model made
+        it elastic, and the spheres it stopped in a wedge (−1 for none).
+    """
+    plasticity, friction, rolling = flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING]
+    adhesion, rotation = flags[FL_ADHESION], flags[FL_ROTATION]
+    no_end = np.int64(END_NONE)
+    st, mstate, mplane = flight.st, flight.mstate, flight.mplane
+    omg, inv_m, inv_i, mat, zstreak = dyn.omg, dyn.inv_m, dyn.inv_i, dyn.mat, dyn.zstreak
+    gravity, box_len, periodic = space
+    planes_n = walls.planes_n
+    wedged_a = wedged_b = -1
+    rest_i = mstate[i] == MS_REST
+    rest_j = mstate[j] == MS_REST
+    wi = omg[i] if rotation else omg[0]
+    wj = omg[j] if rotation else omg[0]
+    ri = st[i, S_R]
+    rj = st[j, S_R]
+    # a sphere on a plane that the impulse presses into the plane is backed by it
+    bix, biy, biz = _support_normal(i, st, mstate, mplane, planes_n, box_len, periodic)
+    bjx, bjy, bjz = _support_normal(j, st, mstate, mplane, planes_n, box_len, periodic)
+    ci = _support_cos(nx, ny, nz, bix, biy, biz)
+    cj = _support_cos(-nx, -ny, -nz, bjx, bjy, bjz)
+    if ci * ci + cj * cj >= 2.0 - SUPPORT_EPS:
+        ci = cj = 0.0  # pressed into two facing planes at once: no rigid limit
+    vi0x, vi0y, vi0z = st[i, 3], st[i, 4], st[i, 5]
+    vj0x, vj0y, vj0z = st[j, 3], st[j, 4], st[j, 5]
+    wi0x, wi0y, wi0z = wi[0], wi[1], wi[2]
+    wj0x, wj0y, wj0z = wj[0], wj[1], wj[2]
+    inv_mi = inv_m[i] * (1.0 - ci * ci)
+    inv_mj = inv_m[j] * (1.0 - cj * cj)
+    inv_ii, inv_ij = inv_i[i], inv_i[j]
+    row, tc_on = tc_row(pair_table[mat[i], mat[j]], t, dyn.t_last[i], dyn.t_last[j], fsc,
+                        dyn.row_tc)
+    # pressed together by their accelerations and meeting slower than a hop: a hop instead of
+    # a collision (see _hop); a sphere at rest is held where it is
+    held_i = mstate[i] == MS_REST
+    held_j = mstate[j] == MS_REST
+    hit = _hop(i, j, nx, ny, nz, 0.0 if held_i else inv_mi, 0.0 if held_j else inv_mj, st,
+               flight.acc, rec, fsc[F_TC_TIME])
+    if hit:
+        counts[EV_HOP] += 1
+        tc_on = False
+        ci, inv_mi, inv_ii = _hold(held_i, ci, inv_mi, inv_ii)
+        cj, inv_mj, inv_ij = _hold(held_j, cj, inv_mj, inv_ij)
+    else:
+        # a sphere at rest met slower than the landing speed is held where it is: such a touch
+        # cannot move it in a pile [OURS]; knocked off, it would stop again at once and be
+        # knocked off again (a zero-time sequence)
+        held_i = _slow_touch_at_rest(i, j, nx, ny, nz, st, mstate, fsc[F_LANDING_SPEED])
+        held_j = _slow_touch_at_rest(j, i, -nx, -ny, -nz, st, mstate, fsc[F_LANDING_SPEED])
+        if held_i and held_j:
+            held_i = held_j = False  # two resting spheres never approach each other
+        ci, inv_mi, inv_ii = _hold(held_i, ci, inv_mi, inv_ii)
+        cj, inv_mj, inv_ij = _hold(held_j, cj, inv_mj, inv_ij)
+    hopped = hit
+    for attempt in range(2):
+        if not hit and approaching(i, j, dx, dy, dz, ri + rj, st):
+            hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, nx, ny, nz, inv_mi,
+                          inv_mj, inv_ii, inv_ij, ri, rj, 1.0 / ri + 1.0 / rj, row, rec,
+                          plasticity, friction, rolling, adhesion, rotation, False)
+        if hit and (ci > 0.0 or cj > 0.0):
+            # the impulse J on i, recovered from the body that moved freely along n
+            if inv_mi >= inv_mj:
+                jx = (st[i, 3] - vi0x) / inv_mi
+                jy = (st[i, 4] - vi0y) / inv_mi
+                jz = (st[i, 5] - vi0z) / inv_mi
+            else:
+                jx = -(st[j, 3] - vj0x) / inv_mj
+                jy = -(st[j, 4] - vj0y) / inv_mj
+                jz = -(st[j, 5] - vj0z) / inv_mj
+            if ci > 0.0:
+                _backed_velocity(i, vi0x, vi0y, vi0z, jx, jy, jz, bix, biy, biz, st, inv_m)
+            if cj > 0.0:
+                _backed_velocity(j, vj0x, vj0y, vj0z, -jx, -jy, -jz, bjx, bjy, bjz, st, inv_m)
+        if not hit or hopped or held_i or held_j or attempt > 0:
+            break
+        # A sleeper that the collision leaves asleep (see _after_backed) has not moved: the
+        # collision was with an immovable body, so it is redone as one [OURS]. Otherwise a
+        # heavier sphere meeting a lighter sleeper would keep approaching it after each
+        # collision (the sleeper's share of the momentum vanishing as it is stopped): a
+        # zero-time sequence of collisions with impulses shrinking geometrically.
+        held_i = _stays_asleep(i, ci, st, mstate, mplane, fsc[F_LANDING_SPEED])
+        held_j = _stays_asleep(j, cj, st, mstate, mplane, fsc[F_LANDING_SPEED])
+        if held_i == held_j:
+            held_i = held_j = False  # (both: two sleepers never approach each other)
+            break
+        st[i, 3], st[i, 4], st[i, 5] = vi0x, vi0y, vi0z
+        st[j, 3], st[j, 4], st[j, 5] = vj0x, vj0y, vj0z
+        wi[0], wi[1], wi[2] = wi0x, wi0y, wi0z
+        wj[0], wj[1], wj[2] = wj0x, wj0y, wj0z
+        ci, inv_mi, inv_ii = _hold(held_i, ci, inv_mi, inv_ii)
+        cj, inv_mj, inv_ij = _hold(held_j, cj, inv_mj, inv_ij)
+        hit = False
+    if not hit:
+        return False, tc_on, wedged_a, wedged_b
+    # a backed sphere stays on its plane (a new segment from its new velocity and spin); one
+    # pulled off it, or asleep on a sphere, flies
+    if not held_i:
+        _after_backed(i, ci, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                      rolling, rotation)
+    if not held_j:
+        _after_backed(j, cj, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                      rolling, rotation)
+    # spheres asleep on a sphere that was at rest and now moves fall again
+    if rest_i and mstate[i] != MS_REST:
+        wake_sleepers(i, t, flight, dyn, walls, space, grid, sched, isc, flags[FL_GRAVITY],
+                      rotation)
+    if rest_j and mstate[j] != MS_REST:
+        wake_sleepers(j, t, flight, dyn, walls, space, grid, sched, isc, flags[FL_GRAVITY],
+                      rotation)
+    # a zero-time sequence against a sphere the collision left at rest, or against one stopped
+    # in such a sequence at this instant (met at standstill: a chain between immovable ends,
+    # see _wedge_stop); not after a hop, whose separation is what ends its zero-time meetings
+    i_holds = _holds(i, vi0x, vi0y, vi0z, mstate, zstreak)
+    j_holds = _holds(j, vj0x, vj0y, vj0z, mstate, zstreak)
+    if not hopped and j_holds and _wedge_stop(i, t, flight, dyn, walls, gravity, pair_table,
+                                              fsc, friction, rolling, rotation):
+        wedged_a = i
+    if not hopped and i_holds and _wedge_stop(j, t, flight, dyn, walls, gravity, pair_table,
+                                              fsc, friction, rolling, rotation):
+        wedged_b = j
+    return True, tc_on, wedged_a, wedged_b
+
+
+@njit(inline="always")
+def lands_before_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, flags):
+    """Whether sphere i, meeting plane w at time t, is too slow to bounce and stays on it
+    instead (MODEL §5.3; what is given up is the rebound, at most ½ m v_land², see
+    hsgran.scene). It is then put on the plane."""
+    friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
+    gn, vn = pressed(i, w, flight.st, walls, gravity)
+    if not (gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]):
+        return False
+    if flight.mstate[i] != MS_FLIGHT:
+        leave_plane(i, flight, dyn, gravity, rotation)
+    enter_plane(i, w, t, np.int64(END_NONE), flight, dyn, walls, gravity, pair_table, fsc,
+                friction, rolling, rotation)
+    return True
+
+
+@njit(inline="always")
+def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, flags):
+    """Collide sphere i with plane w under gravity, with the enduring-contact rules [OURS]: a
+    sphere on another plane is backed by it (a sphere sliding into a side wall), one knocked
+    off its plane flies, one whose rebound is slower than the landing speed lands, and a
+    sphere wedged in a zero-time sequence is stopped (planes never move: immovable).
+
+    Returns:
+        (hit, tc_on, landed, wedged): whether the collision was executed (False: the re-check
+        found it not approaching, nothing changed), whether the TC model made it elastic,
+        whether the sphere landed on the plane, and whether it was stopped in a wedge.
+    """
+    plasticity, friction, rolling = flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING]
+    adhesion, rotation = flags[FL_ADHESION], flags[FL_ROTATION]
+    no_end = np.int64(END_NONE)
+    st, mstate, mplane, omg, inv_m = flight.st, flight.mstate, flight.mplane, dyn.omg, dyn.inv_m
+    planes_n, planes_mat = walls.planes_n, walls.planes_mat
+    wi = omg[i] if rotation else omg[0]
+    ri = st[i, S_R]
+    ci = -1.0
+    pw = -1
+    if mstate[i] != MS_FLIGHT and mplane[i] >= 0:
+        # on another plane (a sphere sliding into a side wall): backed by that plane as in the
+        # pair case, unless the wall pulls it off (or squeezes it head-on)
+        pw = mplane[i]
+        ci = -(planes_n[w, 0] * planes_n[pw, 0] + planes_n[w, 1] * planes_n[pw, 1]
+               + planes_n[w, 2] * planes_n[pw, 2])
+        if ci < 0.0 or ci * ci >= 1.0 - SUPPORT_EPS:
+            ci = -1.0
+    vi0x, vi0y, vi0z = st[i, 3], st[i, 4], st[i, 5]
+    inv_mi = inv_m[i] * (1.0 - ci * ci) if ci >= 0.0 else inv_m[i]
+    row, tc_on = tc_row(pair_table[dyn.mat[i], planes_mat[w]], t, dyn.t_last[i], -NEVER, fsc,
+                        dyn.row_tc)
+    hit = resolve(st[i, S_V:S_V + 3], wi, walls.planes_vel[w], walls.planes_omg[w],
+                  planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0, dyn.inv_i[i],
+                  0.0, ri, 0.0, 1.0 / ri, row, rec, plasticity, friction, rolling, adhesion,
+                  rotation, False)
+    if hit and ci >= 0.0:
+        _backed_velocity(i, vi0x, vi0y, vi0z, (st[i, 3] - vi0x) / inv_mi,
+                         (st[i, 4] - vi0y) / inv_mi, (st[i, 5] - vi0z) / inv_mi,
+                         planes_n[pw, 0], planes_n[pw, 1], planes_n[pw, 2], st, inv_m)
+    if not hit:
+        return False, tc_on, False, False
+    landed = False
+    if ci >= 0.0:
+        enter_plane(i, np.int64(mplane[i]), t, no_end, flight, dyn, walls, gravity, pair_table,
+                    fsc, friction, rolling, rotation)
+    else:
+        if mstate[i] != MS_FLIGHT:
+            leave_plane(i, flight, dyn, gravity, rotation)  # knocked off its plane
+        gn, vn = pressed(i, w, st, walls, gravity)
+        if gn > 0.0 and vn <= fsc[F_LANDING_SPEED]:
+            enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                        rolling, rotation)
+            landed = True
+    # a zero-time sequence against this plane (planes never move: immovable)
+    wedged = not landed and _wedge_stop(i, t, flight, dyn, walls, gravity, pair_table, fsc,
+                                        friction, rolling, rotation)
+    return True, tc_on, landed, wedged
