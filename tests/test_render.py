@@ -59,7 +59,8 @@ BACKGROUND = np.round(np.array(render.BACKGROUND) * 255)
 
 def write_trajectory(path, time, position, velocity, *, radius=RADIUS, omega=None,
                      scene_text=ONE_SPHERE, events=None):
-    """Write a trajectory of N spheres (position, velocity: (F, N, 3)) with TrajectoryWriter."""
+    """Write a trajectory of N spheres (position, velocity: (F, N, 3)) with TrajectoryWriter;
+    ``events``: the event log as a mapping of its fields, or None."""
     time = np.asarray(time, dtype=float)
     position = np.asarray(position, dtype=float)
     f, n, _ = position.shape
@@ -70,11 +71,14 @@ def write_trajectory(path, time, position, velocity, *, radius=RADIUS, omega=Non
             box_upper=None, periodic=(False, False, False), angular_velocity=omega is not None,
             scene_text=scene_text, effects=["rotation"] if omega is not None else [], seed=0,
             version="test", log_events=events is not None) as writer:
-        writer.append_frames(np.arange(f), time, position, np.asarray(velocity, dtype=float),
-                             None if omega is None else np.asarray(omega, dtype=float), zeros,
-                             None if omega is None else zeros, zeros, zeros)
+        writer.append_frames(dict(
+            step=np.arange(f), time=time, position=position,
+            velocity=np.asarray(velocity, dtype=float),
+            angular_velocity=None if omega is None else np.asarray(omega, dtype=float),
+            kinetic_translational=zeros, kinetic_rotational=None if omega is None else zeros,
+            potential=zeros, dissipated=zeros))
         if events is not None:
-            writer.append_events(*events)
+            writer.append_events(events)
     return path
 
 
