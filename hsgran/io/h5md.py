@@ -7,6 +7,9 @@ The layout, every attribute and every unit are described for users in
 * Frames are buffered by the caller and appended in blocks (DESIGN.md §4): every dataset is
   created once, chunked along time and resizable, compressed with ``lzf`` + shuffle (lossless,
   so a round trip is bit for bit).
+* Every per-frame dataset comes from one table, :data:`FRAME_FIELDS`, which the writer, the
+  reader and :func:`copy_frames` all walk, so a new frame quantity cannot be written and then
+  forgotten by the reader or by resume.
 * ``step`` and ``time`` exist once, in ``/particles/all/position``; every other time-dependent
   element (velocity, angular velocity, box edges, observables) hard-links them, which H5MD 1.1
   allows for elements sampled together and requires for the box.
@@ -30,6 +33,10 @@ The layout, every attribute and every unit are described for users in
   omitted when every boundary is ``none``, and MDAnalysis would otherwise take a walled box for a
   periodic cell and apply minimum images through solid walls. The walls' corners are always in
   ``/parameters/hsgran@box_lower``/``box_upper``.
+* The walls are stored as simulated (``/parameters/hsgran/walls``), not only as scene text:
+  re-parsing the text would lose the overrides, and a scene of an older version may no
+  longer parse. The engine's pair table is stored so that a resume can tell whether it would
+  use the same contact laws.
 * ``unit`` attributes are variable-length ASCII strings in H5MD unit notation (``m s-1``);
   MDAnalysis looks them up as Python strings, which fixed-length (bytes) attributes are not.
 """
@@ -484,19 +491,8 @@ class TrajectoryWriter:
 
         particles = f.create_group(PARTICLES)
         clock = f.create_group(FRAME_FIELDS[CLOCK].path)
-        self._step, self._time = (
-            clock.create_dataset(
-                name,
-                shape=(0,),
-                maxshape=(None,),
-                dtype=dtype,
-                chunks=(SERIES_CHUNK_ROWS,),
-                compression=COMPRESSION,
-                shuffle=True,
-            )
-            for name, dtype in (("step", np.int64), ("time", np.float64))
-        )
-        _set_unit(self._time, UNIT_TIME)
+        self._step = _create_series(clock, "step", np.int64, None)
+        self._time = _create_series(clock, "time", np.float64, UNIT_TIME)
         f.create_group(OBSERVABLES)
         self._values = {}
         for name, spec in FRAME_FIELDS.items():
@@ -548,20 +544,8 @@ class TrajectoryWriter:
         self._events = None
         if self.has_events:
             events = f.create_group(EVENTS)
-            self._events = {}
-            for name, (dtype, unit) in EVENT_FIELDS.items():
-                dset = events.create_dataset(
-                    name,
-                    shape=(0,),
-                    maxshape=(None,),
-                    dtype=dtype,
-                    chunks=(SERIES_CHUNK_ROWS,),
-                    compression=COMPRESSION,
-                    shuffle=True,
-                )
-                if unit is not None:
-                    _set_unit(dset, unit)
-                self._events[name] = dset
+            self._events = {name: _create_series(events, name, dtype, unit)
+                            for name, (dtype, unit) in EVENT_FIELDS.items()}
 
     def _create_checkpoint_slots(self, layout: dict) -> None:
         group = self._file.create_group(CHECKPOINT)
@@ -1060,6 +1044,23 @@ def _create_value(group, row_shape, dtype, unit):
         maxshape=(None, *row_shape),
         dtype=dtype,
         chunks=(rows, *row_shape),
+        compression=COMPRESSION,
+        shuffle=True,
+    )
+    if unit is not None:
+        _set_unit(dset, unit)
+    return dset
+
+
+def _create_series(group, name: str, dtype, unit):
+    """A resizable, chunked, compressed 1-D dataset that grows by appends (step, time, the
+    event log)."""
+    dset = group.create_dataset(
+        name,
+        shape=(0,),
+        maxshape=(None,),
+        dtype=dtype,
+        chunks=(SERIES_CHUNK_ROWS,),
         compression=COMPRESSION,
         shuffle=True,
     )
