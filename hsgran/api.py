@@ -13,10 +13,13 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from hsgran import __version__
+import numpy as np
+
+from hsgran import __version__, materials
 from hsgran.engine import Checkpoint, RunSummary, Simulation, SimulationError
 from hsgran.errors import InputError
-from hsgran.io.h5md import TrajectoryWriter, copy_frames, read_checkpoint
+from hsgran.io.h5md import (StoredCheckpoint, TrajectoryWriter, Walls, copy_frames,
+                            read_checkpoint)
 from hsgran.scene import Scene, load_scene, override_note, parse_scene
 
 #: Wall time between two checkpoints of a run that writes a file [s], unless told otherwise: a
@@ -41,16 +44,13 @@ class TrajectoryObserver:
         self.writer = writer
         self.t_end = float(t_end)
 
-    def on_frames(self, b) -> None:
+    def on_frames(self, block) -> None:
         """Append a block of frames."""
-        self.writer.append_frames(b.step, b.time, b.position, b.velocity, b.angular_velocity,
-                                  b.kinetic_translational, b.kinetic_rotational, b.potential,
-                                  b.dissipated, motion_state=b.motion_state)
+        self.writer.append_frames(block)
 
-    def on_events(self, b) -> None:
+    def on_events(self, block) -> None:
         """Append a block of the event log."""
-        self.writer.append_events(b.time, b.kind, b.i, b.j, b.normal_impulse,
-                                  b.tangential_impulse, b.e_n, b.stage, b.regime)
+        self.writer.append_events(block)
 
     def on_checkpoint(self, ck: Checkpoint) -> None:
         """Store a restart state."""
@@ -80,7 +80,8 @@ def open_writer(path, scene: Scene, sim: Simulation, *, log_events: bool,
         angular_velocity=bool(scene.effects.rotation), scene_text=scene.text,
         effects=list(scene.effects.enabled()), seed=int(scene.seed), version=__version__,
         log_events=log_events, creator_args=creator_args, motion_state=True,
-        checkpoint_layout=sim.checkpoint_layout(), overrides=scene.overrides)
+        checkpoint_layout=sim.checkpoint_layout(), overrides=scene.overrides,
+        walls=Walls.of(scene.planes), scene_name=scene.name, pair_table=sim.pair_table)
 
 
 def _run_into(sim: Simulation, writer: TrajectoryWriter, t_end: float, *, progress: bool,
@@ -152,6 +153,36 @@ def run_scene(scene: Scene | str | os.PathLike, output: str | os.PathLike | None
                      checkpoint_wall=checkpoint_wall, stop=stop, remove_if_empty=True)
 
 
+def _pair_column_names() -> dict[int, str]:
+    """Column of a pair row → the name of its ``hsgran.materials.P_*`` constant."""
+    return {value: name for name, value in vars(materials).items()
+            if name.startswith("P_") and isinstance(value, int)}
+
+
+def _check_pair_table(path, stored: StoredCheckpoint, table, material_names) -> None:
+    """Refuse a resume whose contact laws would not be bit for bit those that built the
+    checkpoint (the same version can still differ, e.g. through a changed material file).
+
+    Raises:
+        InputError: naming the first pair and parameter that differ.
+    """
+    old = stored.pair_table
+    if old is None:  # written before the table was stored: the version check is all there is
+        return
+    if old.shape != table.shape:
+        raise InputError(f"{path}: the checkpoint's pair table has shape {old.shape}, this "
+                         f"scene's {table.shape}: resume with the hsgran that wrote it or "
+                         "start again")
+    if old.tobytes() == table.tobytes():  # bits, so NaNs (no contact law) compare equal
+        return
+    a, b, k = (int(x) for x in np.argwhere(old.view(np.uint64) != table.view(np.uint64))[0])
+    column = _pair_column_names().get(k, f"column {k}")
+    raise InputError(f"{path}: the contact law {material_names[a]}-{material_names[b]} differs "
+                     f"from the checkpoint's ({column}: {old[a, b, k]!r} stored, "
+                     f"{table[a, b, k]!r} now): resume with the hsgran that wrote it or start "
+                     "again")
+
+
 def resume_run(path: str | os.PathLike, *, until: float | None = None, progress: bool = False,
                checkpoint_every: float | None = None,
                checkpoint_wall: float | None = CHECKPOINT_WALL,
@@ -171,11 +202,16 @@ def resume_run(path: str | os.PathLike, *, until: float | None = None, progress:
         The :class:`~hsgran.engine.RunSummary` of the resumed part.
 
     Raises:
-        InputError: no usable checkpoint, nothing left to run, or ``until`` before it.
+        InputError: no usable checkpoint, nothing left to run, ``until`` before it, or the
+            checkpoint was written by another hsgran version or with other contact laws (a
+            resume would not continue the run bit for bit).
         hsgran.engine.SimulationError: the run could not continue.
     """
     path = Path(path)
     stored = read_checkpoint(path)
+    if stored.hsgran_version != __version__:
+        raise InputError(f"{path}: checkpoint written by hsgran {stored.hsgran_version}, this "
+                         f"is {__version__}: resume with that version or start again")
     text, note = stored.scene_text, override_note(stored.overrides)
     if stored.overrides and text.endswith(note):
         text = text[:-len(note)]
@@ -193,6 +229,7 @@ def resume_run(path: str | os.PathLike, *, until: float | None = None, progress:
         raise InputError(f"{path} is complete (t = {stored.time:.9g} s): give a later --until "
                          "to extend it")
     sim = Simulation(scene, log_events=stored.log_events)
+    _check_pair_table(path, stored, sim.pair_table, scene.material_names)
     try:
         sim.restore(Checkpoint(stored.arrays, stored.time, stored.frames, stored.events,
                                stored.version))

@@ -72,7 +72,11 @@ class SimulationError(HsgranError):
 
 @dataclass
 class FrameBlock:
-    """Frames sampled exactly at the frame times (SI units)."""
+    """Frames sampled exactly at the frame times (SI units).
+
+    Each field besides ``step`` and ``time`` has its entry in ``hsgran.io.h5md.FRAME_FIELDS``,
+    which says where the trajectory file stores it (tests/io checks that the two agree).
+    """
 
     step: np.ndarray  #: frame index (F,)
     time: np.ndarray  #: [s] (F,)
@@ -91,7 +95,7 @@ class FrameBlock:
 
 @dataclass
 class EventBlock:
-    """Executed collisions (the event log)."""
+    """Executed collisions (the event log); ``hsgran.io.h5md.EVENT_FIELDS`` stores each field."""
 
     time: np.ndarray  #: [s]
     kind: np.ndarray  #: event kind code: the logged rows of hsgran.events.kinds.KINDS

@@ -300,23 +300,43 @@ def check_options(traj, *, camera: str, color_by: str, spheres: str) -> CameraSp
     return spec
 
 
-def _planes(traj) -> tuple[list[Plane], str]:
-    """Plane walls and scene name from the stored scene text (the box alone if it no longer
-    parses, e.g. written by another version)."""
+def wall_planes(traj) -> tuple[list[Plane], str]:
+    """The plane walls to draw and the scene's name.
+
+    Both come from the file (the walls as simulated, overrides included). A file written
+    before walls were stored has them re-built from its scene text and overrides; if that
+    fails (e.g. a scene of another version), a one-line warning goes to stderr and only the
+    box is drawn.
+
+    Args:
+        traj: A :class:`hsgran.io.h5md.Trajectory`.
+
+    Returns:
+        The planes (:class:`hsgran.scene.Plane`) and the scene's name ("" if unknown).
+    """
+    walls = traj.walls
+    if walls is not None:
+        planes = [Plane(walls.point[k], walls.normal[k], int(walls.material[k]), walls.key[k])
+                  for k in range(len(walls))]
+        return planes, traj.scene_name
     try:
-        scene = parse_scene(traj.scene_text)
+        # the stored text ends with comment lines naming the overrides, which TOML ignores
+        scene = parse_scene(traj.scene_text, overrides=traj.overrides or None)
         return list(scene.planes), scene.name
-    except InputError:
-        planes = []
-        if traj.box_lower is not None:
-            for axis in range(3):
-                if traj.periodic[axis]:
-                    continue
-                for corner, sign in ((traj.box_lower, 1.0), (traj.box_upper, -1.0)):
-                    normal = np.zeros(3)
-                    normal[axis] = sign
-                    planes.append(Plane(np.array(corner, dtype=float), normal, 0, "box"))
-        return planes, ""
+    except InputError as exc:
+        print(f"warning: the file holds no walls (written before they were stored) and its "
+              f"scene text does not parse ({exc}): drawing the box only",
+              file=sys.stderr)
+    planes = []
+    if traj.box_lower is not None:
+        for axis in range(3):
+            if traj.periodic[axis]:
+                continue
+            for corner, sign in ((traj.box_lower, 1.0), (traj.box_upper, -1.0)):
+                normal = np.zeros(3)
+                normal[axis] = sign
+                planes.append(Plane(np.array(corner, dtype=float), normal, 0, "box"))
+    return planes, ""
 
 
 class Renderer:
@@ -350,7 +370,7 @@ class Renderer:
                                                and traj.n_particles <= MESH_SPHERES_MAX)
         self.decimals = decimals
         self.time_note = time_note
-        planes, name = _planes(traj)
+        planes, name = wall_planes(traj)
         self.title = name if title is None else title
 
         pv = _import_pyvista()

@@ -19,9 +19,11 @@ import h5py
 import numpy as np
 import pytest
 
+import hsgran
 from hsgran.api import resume_run, run_scene
 from hsgran.engine import Simulation
 from hsgran.io.h5md import read_checkpoint, read_trajectory
+from hsgran.materials import P_MU_S
 from hsgran.scene import parse_scene
 from tests.cli_errors import run_error
 
@@ -238,6 +240,49 @@ def test_a_run_that_fails_before_its_first_frame_leaves_no_file(tmp_path, capsys
     run_error(capsys, ["run", str(good), "-o", str(tmp_path / "nodir" / "out.h5"),
                        "--no-progress"])
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.toml", "good.toml"]
+
+
+
+def cut_file(tmp_path):
+    """A 5-sphere pile run stopped early: a file with a checkpoint to resume from."""
+    scene = tmp_path / "pile.toml"
+    scene.write_text(pile(5, duration=0.004))
+    calls = iter(range(1000))
+    out = tmp_path / "cut.h5"
+    assert run_scene(scene, out, checkpoint_every=0.001, stop=lambda: next(calls) == 1
+                     ).interrupted
+    return out
+
+
+def test_resume_refuses_a_checkpoint_of_another_hsgran_version(tmp_path, capsys):
+    out = cut_file(tmp_path)
+    with h5py.File(out, "r+") as f:
+        f["parameters/hsgran"].attrs["version"] = "0.0.1"
+    before = out.read_bytes()
+    err = run_error(capsys, ["run", "--resume", str(out), "--no-progress"])
+    assert f"checkpoint written by hsgran 0.0.1, this is {hsgran.__version__}" in err
+    assert "resume with that version or start again" in err
+    assert out.read_bytes() == before  # nothing written
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut.h5", "pile.toml"]
+
+
+def test_resume_refuses_a_checkpoint_built_with_other_contact_laws(tmp_path, capsys):
+    out = cut_file(tmp_path)
+    stored = read_checkpoint(out)
+    names = read_trajectory(out).material_names
+    steel, glass = names.index("steel"), names.index("glass")
+    assert stored.pair_table is not None
+    with h5py.File(out, "r+") as f:  # as if written with another friction for steel on glass
+        table = f["parameters/hsgran/pair_table"]
+        table[glass, steel, P_MU_S] = stored.pair_table[glass, steel, P_MU_S] + 0.1
+    before = out.read_bytes()
+    err = run_error(capsys, ["run", "--resume", str(out), "--no-progress"])
+    assert "contact law glass-steel differs from the checkpoint's (P_MU_S: " in err
+    assert out.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut.h5", "pile.toml"]
+    with h5py.File(out, "r+") as f:  # the table as written: the resume goes ahead
+        f["parameters/hsgran/pair_table"][...] = stored.pair_table
+    assert not resume_run(out).interrupted
 
 
 @pytest.mark.parametrize(("args", "needle"), [

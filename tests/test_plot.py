@@ -52,15 +52,20 @@ def write(path, n=2, frames=101, events=True, rotation=True):
             periodic=(False, False, False), angular_velocity=rotation, scene_text=SCENE,
             effects=["gravity", "rotation"], seed=0, version="test",
             log_events=events) as w:
-        w.append_frames(np.arange(frames), t, position, velocity, omega if rotation else None,
-                        kinetic, rotational if rotation else None, potential, np.zeros(frames))
+        w.append_frames(dict(step=np.arange(frames), time=t, position=position,
+                             velocity=velocity, angular_velocity=omega if rotation else None,
+                             kinetic_translational=kinetic,
+                             kinetic_rotational=rotational if rotation else None,
+                             potential=potential, dissipated=np.zeros(frames)))
         if events:
             # particle 0: a pair collision with 1 at 0.2 s, a wall collision at 0.5 s, a state
             # change at 0.75 s; particle 1 only the pair collision
-            w.append_events(np.array([0.2, 0.5, 0.75]), np.array([EV_PAIR, EV_WALL, EV_STATE]),
-                            np.array([0, 0, 0]), np.array([1, -1, -1]), np.zeros(3),
-                            np.zeros(3), np.array([1.0, 1.0, np.nan]), np.zeros(3, dtype=int),
-                            np.zeros(3, dtype=int))
+            w.append_events(dict(time=np.array([0.2, 0.5, 0.75]),
+                                 kind=np.array([EV_PAIR, EV_WALL, EV_STATE]),
+                                 i=np.array([0, 0, 0]), j=np.array([1, -1, -1]),
+                                 normal_impulse=np.zeros(3), tangential_impulse=np.zeros(3),
+                                 e_n=np.array([1.0, 1.0, np.nan]), stage=np.zeros(3, dtype=int),
+                                 regime=np.zeros(3, dtype=int)))
     return path
 
 

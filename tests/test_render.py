@@ -27,7 +27,7 @@ import pytest
 
 from hsgran import animation, render
 from hsgran.errors import EXIT_BAD_INPUT
-from hsgran.io.h5md import TrajectoryWriter
+from hsgran.io.h5md import TrajectoryWriter, read_trajectory
 from tests.cli_errors import run_error
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -59,7 +59,8 @@ BACKGROUND = np.round(np.array(render.BACKGROUND) * 255)
 
 def write_trajectory(path, time, position, velocity, *, radius=RADIUS, omega=None,
                      scene_text=ONE_SPHERE, events=None):
-    """Write a trajectory of N spheres (position, velocity: (F, N, 3)) with TrajectoryWriter."""
+    """Write a trajectory of N spheres (position, velocity: (F, N, 3)) with TrajectoryWriter;
+    ``events``: the event log as a mapping of its fields, or None."""
     time = np.asarray(time, dtype=float)
     position = np.asarray(position, dtype=float)
     f, n, _ = position.shape
@@ -70,11 +71,14 @@ def write_trajectory(path, time, position, velocity, *, radius=RADIUS, omega=Non
             box_upper=None, periodic=(False, False, False), angular_velocity=omega is not None,
             scene_text=scene_text, effects=["rotation"] if omega is not None else [], seed=0,
             version="test", log_events=events is not None) as writer:
-        writer.append_frames(np.arange(f), time, position, np.asarray(velocity, dtype=float),
-                             None if omega is None else np.asarray(omega, dtype=float), zeros,
-                             None if omega is None else zeros, zeros, zeros)
+        writer.append_frames(dict(
+            step=np.arange(f), time=time, position=position,
+            velocity=np.asarray(velocity, dtype=float),
+            angular_velocity=None if omega is None else np.asarray(omega, dtype=float),
+            kinetic_translational=zeros, kinetic_rotational=None if omega is None else zeros,
+            potential=zeros, dissipated=zeros))
         if events is not None:
-            writer.append_events(*events)
+            writer.append_events(events)
     return path
 
 
@@ -319,6 +323,64 @@ def test_state_colours_follow_the_engine_sliding_then_rolling(tmp_path):
     assert red > green > blue                         # sliding: orange
     red, green, blue = colours["0.25"]
     assert green > max(red, blue)                     # rolling: green
+
+
+
+# ---- walls ---------------------------------------------------------------------------------
+
+#: A sweep's wall overrides: the floor of tests/sweep/scenes.py's BALL moved down and tilted
+#: about x (a unit normal, so the scene stores it as given).
+TILTED_FLOOR = {"walls[0].point": [0.0, 0.0, -0.002], "walls[0].normal": [0.0, 0.28, 0.96]}
+
+
+def swept_ball(path):
+    """The ball of the sweep tests run as one case of a sweep with TILTED_FLOOR."""
+    from hsgran.sweep.case import run_case
+    from tests.sweep.scenes import BALL
+
+    run_case(BALL, TILTED_FLOOR, source="ball.toml", trajectory=path)
+    return path
+
+
+def test_render_draws_the_walls_a_sweep_case_simulated(tmp_path):
+    traj = read_trajectory(swept_ball(tmp_path / "case.h5"))
+    planes, name = render.wall_planes(traj)
+    assert name == "ball on glass"
+    (floor,) = planes
+    np.testing.assert_array_equal(floor.point, TILTED_FLOOR["walls[0].point"])
+    np.testing.assert_array_equal(floor.normal, TILTED_FLOOR["walls[0].normal"])
+    assert traj.material_names[floor.material] == "glass"
+    # the rectangle drawn lies in the tilted plane and faces the spheres' side
+    lower, upper = animation.scene_extent(traj)
+    (patch,) = animation.wall_patches(planes, lower, upper, traj.box_lower, traj.box_upper)
+    np.testing.assert_allclose(patch.normal, TILTED_FLOOR["walls[0].normal"])
+    offsets = (patch.corners - floor.point) @ floor.normal
+    np.testing.assert_allclose(offsets, 0.0, atol=1e-15)
+
+
+def test_a_file_without_walls_rebuilds_them_from_its_scene_text_and_overrides(tmp_path, capsys):
+    path = swept_ball(tmp_path / "case.h5")
+    with h5py.File(path, "r+") as f:  # as written before the walls were stored
+        del f["parameters/hsgran/walls"]
+    traj = read_trajectory(path)
+    assert traj.walls is None
+    (floor,), name = render.wall_planes(traj)
+    np.testing.assert_array_equal(floor.normal, TILTED_FLOOR["walls[0].normal"])
+    assert name == "ball on glass"
+    assert capsys.readouterr().err == ""
+
+
+def test_a_scene_text_that_no_longer_parses_warns_and_draws_the_box_only(tmp_path, capsys):
+    path = tmp_path / "old.h5"
+    write_trajectory(path, [0.0], np.zeros((1, 1, 3)), np.zeros((1, 1, 3)),
+                     scene_text=ONE_SPHERE + "[[walls]]\nkind = \"cone\"\n")
+    planes, name = render.wall_planes(read_trajectory(path))
+    assert planes == []
+    assert name == ""
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert err.startswith("warning: the file holds no walls")
+    assert "walls[0].kind" in err
 
 
 # ---- bad input -----------------------------------------------------------------------------

@@ -7,6 +7,9 @@ The layout, every attribute and every unit are described for users in
 * Frames are buffered by the caller and appended in blocks (DESIGN.md §4): every dataset is
   created once, chunked along time and resizable, compressed with ``lzf`` + shuffle (lossless,
   so a round trip is bit for bit).
+* Every per-frame dataset comes from one table, :data:`FRAME_FIELDS`, which the writer, the
+  reader and :func:`copy_frames` all walk, so a new frame quantity cannot be written and then
+  forgotten by the reader or by resume.
 * ``step`` and ``time`` exist once, in ``/particles/all/position``; every other time-dependent
   element (velocity, angular velocity, box edges, observables) hard-links them, which H5MD 1.1
   allows for elements sampled together and requires for the box.
@@ -30,6 +33,10 @@ The layout, every attribute and every unit are described for users in
   omitted when every boundary is ``none``, and MDAnalysis would otherwise take a walled box for a
   periodic cell and apply minimum images through solid walls. The walls' corners are always in
   ``/parameters/hsgran@box_lower``/``box_upper``.
+* The walls are stored as simulated (``/parameters/hsgran/walls``), not only as scene text:
+  re-parsing the text would lose the overrides, and a scene of an older version may no
+  longer parse. The engine's pair table is stored so that a resume can tell whether it would
+  use the same contact laws.
 * ``unit`` attributes are variable-length ASCII strings in H5MD unit notation (``m s-1``);
   MDAnalysis looks them up as Python strings, which fixed-length (bytes) attributes are not.
 """
@@ -38,7 +45,8 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import h5py
 import numpy as np
@@ -59,6 +67,9 @@ OBSERVABLES = "observables"
 PARAMETERS = "parameters/hsgran"
 EVENTS = "hsgran/events"
 CHECKPOINT = "hsgran/checkpoint"
+#: Group of :class:`Walls` and dataset of the pair table, in ``PARAMETERS``.
+WALLS = "walls"
+PAIR_TABLE = "pair_table"
 #: What h5py and numpy raise on a damaged file (bad links, checksums, shapes, decompression,
 #: absurd sizes); each is turned into a one-line :class:`~hsgran.errors.InputError`.
 DAMAGED = (KeyError, ValueError, TypeError, OSError, RuntimeError, IndexError, AttributeError,
@@ -89,12 +100,63 @@ UNIT_ENERGY = "J"
 UNIT_TIME = "s"
 UNIT_IMPULSE = "kg m s-1"
 
-#: Observable name in the file → argument of :meth:`TrajectoryWriter.append_frames`.
+#: Stands for the number of particles in :attr:`FrameField.shape`.
+PER_PARTICLE = "N"
+
+
+@dataclass(frozen=True)
+class FrameField:
+    """Where and how one per-frame quantity is stored (an entry of :data:`FRAME_FIELDS`).
+
+    Attributes:
+        path: The H5MD time-dependent element that holds it; its ``value`` dataset is the data,
+            its ``step`` and ``time`` are hard links to the position's.
+        unit: H5MD unit string, or ``None`` for codes.
+        dtype: Type stored.
+        shape: Shape of one frame's row, :data:`PER_PARTICLE` standing for N.
+        switch: Argument of :class:`TrajectoryWriter` that turns the field on
+            (``angular_velocity``, ``motion_state``), or ``None`` when every file has it.
+    """
+
+    path: str
+    unit: str | None
+    dtype: type
+    shape: tuple
+    switch: str | None = None
+
+    def row_shape(self, n_particles: int) -> tuple:
+        """Shape of one frame's row for ``n_particles`` particles."""
+        return tuple(n_particles if d == PER_PARTICLE else d for d in self.shape)
+
+
+#: Every per-frame quantity besides ``step`` and ``time``, by its name in a block of frames
+#: (:class:`hsgran.engine.FrameBlock`, :meth:`TrajectoryWriter.append_frames`). The writer
+#: creates, checks and appends, and :func:`read_trajectory` and :func:`copy_frames` read, what
+#: this table lists: a new frame quantity is a field of the block and one entry here (and, for
+#: an element under ``particles/all``, the :class:`Trajectory` attribute of the same name).
+#: The order is that of the appends; ``position`` comes first because it owns the clock.
+FRAME_FIELDS = {
+    "position": FrameField(f"{PARTICLES}/position", UNIT_LENGTH, np.float64, (PER_PARTICLE, 3)),
+    "velocity": FrameField(f"{PARTICLES}/velocity", UNIT_VELOCITY, np.float64,
+                           (PER_PARTICLE, 3)),
+    "angular_velocity": FrameField(f"{PARTICLES}/angular_velocity", UNIT_ANGULAR_VELOCITY,
+                                   np.float64, (PER_PARTICLE, 3), "angular_velocity"),
+    "motion_state": FrameField(f"{PARTICLES}/motion_state", None, np.int8, (PER_PARTICLE,),
+                               "motion_state"),
+    "kinetic_translational": FrameField(f"{OBSERVABLES}/kinetic_energy_translational",
+                                        UNIT_ENERGY, np.float64, ()),
+    "kinetic_rotational": FrameField(f"{OBSERVABLES}/kinetic_energy_rotational", UNIT_ENERGY,
+                                     np.float64, (), "angular_velocity"),
+    "potential": FrameField(f"{OBSERVABLES}/potential_energy", UNIT_ENERGY, np.float64, ()),
+    "dissipated": FrameField(f"{OBSERVABLES}/dissipated_energy", UNIT_ENERGY, np.float64, ()),
+}
+#: The element whose ``step`` and ``time`` datasets every other element links to.
+CLOCK = "position"
+#: Observable name in the file → field of a block of frames (:data:`FRAME_FIELDS`).
 ENERGY_OBSERVABLES = {
-    "kinetic_energy_translational": "kinetic_translational",
-    "kinetic_energy_rotational": "kinetic_rotational",
-    "potential_energy": "potential",
-    "dissipated_energy": "dissipated",
+    spec.path.rsplit("/", 1)[1]: name
+    for name, spec in FRAME_FIELDS.items()
+    if spec.path.startswith(OBSERVABLES + "/")
 }
 
 #: Event-log datasets: name → (dtype, unit or None).
@@ -115,6 +177,36 @@ LIBVER = ("v110", "latest")
 
 _ASCII = h5py.string_dtype("ascii")
 _UTF8 = h5py.string_dtype("utf-8")
+
+
+@dataclass
+class Walls:
+    """The plane walls a run simulated, box faces included, one row per plane.
+
+    Attributes:
+        point: A point of each plane [m], shape (P, 3).
+        normal: Unit normal of each plane [-], shape (P, 3), pointing to where spheres live.
+        material: Material index of each plane, shape (P,), into the material names.
+        key: Key path of each plane in the scene (``walls[0]``, ``walls[1].lower_z``).
+    """
+
+    point: np.ndarray
+    normal: np.ndarray
+    material: np.ndarray
+    key: list[str]
+
+    @classmethod
+    def of(cls, planes) -> Walls:
+        """The walls of ``planes``: objects with ``point``, ``normal``, ``material`` and ``key``
+        attributes (:class:`hsgran.scene.Plane`)."""
+        planes = list(planes)
+        return cls(point=np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3),
+                   normal=np.array([p.normal for p in planes], dtype=np.float64).reshape(-1, 3),
+                   material=np.array([p.material for p in planes], dtype=np.int32),
+                   key=[str(p.key) for p in planes])
+
+    def __len__(self) -> int:
+        return int(self.point.shape[0])
 
 
 @dataclass
@@ -149,6 +241,12 @@ class Trajectory:
         motion_state: Motion state of every particle in every frame, shape (F, N), int8
             (``hsgran.onplane.MS_*``: 0 flight, 1 sliding, 2 rolling, 3 at rest on a plane,
             4 asleep on another sphere), or ``None`` when the file has none.
+        walls: The plane walls the run simulated, or ``None`` when the file does not hold them
+            (written before they were stored, or by a writer not given them).
+        scene_name: Name of the scene as run ("" when the file does not hold it).
+        overrides: Key path → value changes the scene was run with.
+        pair_table: The contact-law parameters of every pair of materials the engine used,
+            shape (M, M, K) (``hsgran.materials.pair_row``), or ``None`` when not stored.
     """
 
     time: np.ndarray
@@ -173,6 +271,10 @@ class Trajectory:
     complete: bool = True
     creator_args: str = ""
     motion_state: np.ndarray | None = None
+    walls: Walls | None = None
+    scene_name: str = ""
+    overrides: dict = field(default_factory=dict)
+    pair_table: np.ndarray | None = None
 
     @property
     def n_frames(self) -> int:
@@ -212,6 +314,12 @@ class TrajectoryWriter:
         checkpoint_layout: Shape and dtype of every checkpoint array by name (two slots are
             preallocated, see :meth:`write_checkpoint`), or ``None`` for no checkpoints.
         overrides: Key path → value changes the scene was run with (JSON-serialisable).
+        walls: The plane walls simulated (with the overrides applied), or ``None`` to store
+            none (readers then fall back to the scene text).
+        scene_name: Name of the scene as run.
+        pair_table: The engine's contact-law parameters of every pair of materials, shape
+            (M, M, K) with M material names, or ``None``; ``hsgran run --resume`` compares it
+            with the one it would use.
 
     Raises:
         InputError: The file cannot be created, or a periodic axis has no box.
@@ -239,6 +347,9 @@ class TrajectoryWriter:
         motion_state: bool = False,
         checkpoint_layout: dict | None = None,
         overrides: dict | None = None,
+        walls: Walls | None = None,
+        scene_name: str = "",
+        pair_table=None,
     ):
         radius = np.asarray(radius, dtype=np.float64)
         if radius.ndim != 1 or radius.shape[0] == 0:
@@ -274,11 +385,22 @@ class TrajectoryWriter:
         elif any(periodic):
             raise InputError("a periodic axis needs a box (box_lower and box_upper)")
         seed_attribute = _seed_attribute(seed)
+        if walls is not None:
+            walls = _checked_walls(walls, len(material_names))
+        if pair_table is not None:
+            pair_table = np.asarray(pair_table, dtype=np.float64)
+            m = len(material_names)
+            if pair_table.ndim != 3 or pair_table.shape[:2] != (m, m):
+                raise ValueError(f"pair_table: expected shape ({m}, {m}, K), one row per pair "
+                                 f"of material names, got {pair_table.shape}")
 
         self.path = os.fspath(path)
         self.n_particles = n
         self.has_angular_velocity = bool(angular_velocity)
         self.has_motion_state = bool(motion_state)
+        #: The switches of :attr:`FrameField.switch`.
+        self._switches = {"angular_velocity": self.has_angular_velocity,
+                          "motion_state": self.has_motion_state}
         self.has_events = bool(log_events)
         self.has_edges = any(periodic)
         self._edges = None if box_lower is None else box_upper - box_lower
@@ -314,6 +436,9 @@ class TrajectoryWriter:
                 version=str(version),
                 creator_args=str(creator_args),
                 overrides=json.dumps(dict(overrides or {}), default=_json_default),
+                walls=walls,
+                scene_name=str(scene_name),
+                pair_table=pair_table,
             )
             self._checkpoint_layout = None
             if checkpoint_layout is not None:
@@ -347,6 +472,9 @@ class TrajectoryWriter:
         version,
         creator_args,
         overrides,
+        walls,
+        scene_name,
+        pair_table,
     ):
         f = self._file
         n = self.n_particles
@@ -362,44 +490,16 @@ class TrajectoryWriter:
         units.attrs.create("system", "SI", dtype=_ASCII)
 
         particles = f.create_group(PARTICLES)
-        position = particles.create_group("position")
-        step = position.create_dataset(
-            "step",
-            shape=(0,),
-            maxshape=(None,),
-            dtype=np.int64,
-            chunks=(SERIES_CHUNK_ROWS,),
-            compression=COMPRESSION,
-            shuffle=True,
-        )
-        time = position.create_dataset(
-            "time",
-            shape=(0,),
-            maxshape=(None,),
-            dtype=np.float64,
-            chunks=(SERIES_CHUNK_ROWS,),
-            compression=COMPRESSION,
-            shuffle=True,
-        )
-        _set_unit(time, UNIT_TIME)
-        self._step, self._time = step, time
-        self._position = _create_value(position, (n, 3), np.float64, UNIT_LENGTH)
-        self._velocity = _create_value(
-            self._element(particles, "velocity"), (n, 3), np.float64, UNIT_VELOCITY
-        )
-        self._angular_velocity = None
-        if self.has_angular_velocity:
-            self._angular_velocity = _create_value(
-                self._element(particles, "angular_velocity"),
-                (n, 3),
-                np.float64,
-                UNIT_ANGULAR_VELOCITY,
-            )
-        self._motion_state = None
-        if self.has_motion_state:
-            self._motion_state = _create_value(
-                self._element(particles, "motion_state"), (n,), np.int8, None
-            )
+        clock = f.create_group(FRAME_FIELDS[CLOCK].path)
+        self._step = _create_series(clock, "step", np.int64, None)
+        self._time = _create_series(clock, "time", np.float64, UNIT_TIME)
+        f.create_group(OBSERVABLES)
+        self._values = {}
+        for name, spec in FRAME_FIELDS.items():
+            if spec.switch is not None and not self._switches[spec.switch]:
+                continue
+            group = clock if name == CLOCK else self._element(f, spec.path)
+            self._values[name] = _create_value(group, spec.row_shape(n), spec.dtype, spec.unit)
 
         box = particles.create_group("box")
         box.attrs["dimension"] = np.int32(3)
@@ -415,15 +515,6 @@ class TrajectoryWriter:
         _set_unit(particles.create_dataset("mass", data=mass), UNIT_MASS)
         particles.create_dataset("species", data=material)
 
-        observables = f.create_group(OBSERVABLES)
-        self._energies = {}
-        for name, argument in ENERGY_OBSERVABLES.items():
-            if argument == "kinetic_rotational" and not self.has_angular_velocity:
-                continue
-            self._energies[argument] = _create_value(
-                self._element(observables, name), (), np.float64, UNIT_ENERGY
-            )
-
         parameters = f.create_group(PARAMETERS)
         attrs = parameters.attrs
         attrs["format_version"] = np.int32(FORMAT_VERSION)
@@ -436,27 +527,25 @@ class TrajectoryWriter:
         attrs.create("creator_args", creator_args, dtype=_UTF8)
         attrs.create("overrides", overrides, dtype=_UTF8)
         attrs.create("summary", "{}", dtype=_UTF8)
+        attrs.create("scene_name", scene_name, dtype=_UTF8)
         if box_lower is not None:
             attrs["box_lower"] = box_lower
             attrs["box_upper"] = box_upper
+        if walls is not None:
+            group = parameters.create_group(WALLS)
+            _set_unit(group.create_dataset("point", data=walls.point), UNIT_LENGTH)
+            group.create_dataset("normal", data=walls.normal)
+            group.create_dataset("material", data=walls.material)
+            group.create_dataset("key", data=np.array(walls.key, dtype=object).reshape(-1),
+                                 dtype=_UTF8)
+        if pair_table is not None:
+            parameters.create_dataset(PAIR_TABLE, data=pair_table)
 
         self._events = None
         if self.has_events:
             events = f.create_group(EVENTS)
-            self._events = {}
-            for name, (dtype, unit) in EVENT_FIELDS.items():
-                dset = events.create_dataset(
-                    name,
-                    shape=(0,),
-                    maxshape=(None,),
-                    dtype=dtype,
-                    chunks=(SERIES_CHUNK_ROWS,),
-                    compression=COMPRESSION,
-                    shuffle=True,
-                )
-                if unit is not None:
-                    _set_unit(dset, unit)
-                self._events[name] = dset
+            self._events = {name: _create_series(events, name, dtype, unit)
+                            for name, (dtype, unit) in EVENT_FIELDS.items()}
 
     def _create_checkpoint_slots(self, layout: dict) -> None:
         group = self._file.create_group(CHECKPOINT)
@@ -482,79 +571,40 @@ class TrajectoryWriter:
 
     # -- appending ------------------------------------------------------------------------
 
-    def append_frames(
-        self,
-        step,
-        time,
-        position,
-        velocity,
-        angular_velocity,
-        kinetic_translational,
-        kinetic_rotational,
-        potential,
-        dissipated,
-        motion_state=None,
-    ) -> None:
+    def append_frames(self, frames) -> None:
         """Append a block of F frames (F may be 0) and flush the file.
 
         Args:
-            step: Frame numbers, shape (F,), int, non-decreasing.
-            time: Frame times [s], shape (F,), non-decreasing.
-            position: Positions [m], shape (F, N, 3).
-            velocity: Velocities [m/s], shape (F, N, 3).
-            angular_velocity: Angular velocities [rad/s], shape (F, N, 3); ``None`` exactly when
-                the writer was created with ``angular_velocity=False``.
-            kinetic_translational: Translational kinetic energy [J], shape (F,).
-            kinetic_rotational: Rotational kinetic energy [J], shape (F,); ``None`` exactly when
-                there are no angular velocities.
-            potential: Potential energy [J], shape (F,).
-            dissipated: Energy dissipated so far [J], shape (F,).
-            motion_state: Motion states, shape (F, N), int8; ``None`` exactly when the writer
-                was created with ``motion_state=False``.
+            frames: ``step`` (frame numbers, shape (F,), int, non-decreasing), ``time`` (frame
+                times [s], shape (F,), non-decreasing) and the fields of
+                :data:`FRAME_FIELDS`, each of shape (F, *row) in its unit, as the attributes of
+                an object (:class:`hsgran.engine.FrameBlock`) or the entries of a mapping. A
+                field whose switch the writer was created without is ``None`` or absent; every
+                other field is required.
 
         Raises:
-            ValueError: A shape does not match, an optional field is given or missing against
-                the writer's settings, steps or times decrease, or the writer is closed.
+            ValueError: A shape does not match, a field is missing, given against the writer's
+                switches or unknown (in a mapping), steps or times decrease, or the writer is
+                closed.
         """
         self._check_open()
-        step_in = np.asarray(step)
+        get = _block_fields(frames, ("step", "time", *FRAME_FIELDS), "frames")
+        step_in = np.asarray(get("step"))
         if step_in.ndim != 1:
             raise ValueError(f"step: expected shape (F,), got {step_in.shape}")
         if step_in.size and not np.issubdtype(step_in.dtype, np.integer):
             raise ValueError(f"step: expected integers, got {step_in.dtype}")
         n_new = step_in.shape[0]
-        n = self.n_particles
         step_arr = step_in.astype(np.int64, copy=False)
-        time_arr = _checked(time, "time", (n_new,), np.float64)
-        values = [
-            (self._position, _checked(position, "position", (n_new, n, 3), np.float64)),
-            (self._velocity, _checked(velocity, "velocity", (n_new, n, 3), np.float64)),
-        ]
-        if self.has_angular_velocity != (angular_velocity is not None):
-            raise ValueError(_optional_message("angular_velocity", self.has_angular_velocity))
-        if self.has_angular_velocity != (kinetic_rotational is not None):
-            raise ValueError(_optional_message("kinetic_rotational", self.has_angular_velocity))
-        if angular_velocity is not None:
-            values.append(
-                (
-                    self._angular_velocity,
-                    _checked(angular_velocity, "angular_velocity", (n_new, n, 3), np.float64),
-                )
-            )
-        if self.has_motion_state != (motion_state is not None):
-            raise ValueError(_optional_message("motion_state", self.has_motion_state))
-        if motion_state is not None:
-            values.append(
-                (self._motion_state, _checked(motion_state, "motion_state", (n_new, n), np.int8))
-            )
-        given = {
-            "kinetic_translational": kinetic_translational,
-            "kinetic_rotational": kinetic_rotational,
-            "potential": potential,
-            "dissipated": dissipated,
-        }
-        for argument, dset in self._energies.items():
-            values.append((dset, _checked(given[argument], argument, (n_new,), np.float64)))
+        time_arr = _checked(get("time"), "time", (n_new,), np.float64)
+        values = []
+        for name, spec in FRAME_FIELDS.items():
+            given, dset = get(name), self._values.get(name)
+            if (given is None) != (dset is None):
+                raise ValueError(_optional_message(name, spec.switch, dset is not None))
+            if dset is not None:
+                shape = (n_new, *spec.row_shape(self.n_particles))
+                values.append((dset, _checked(given, name, shape, spec.dtype)))
         if n_new == 0:
             return
         _check_non_decreasing(step_arr, self._last_step, "step")
@@ -574,52 +624,28 @@ class TrajectoryWriter:
         self._last_step = step_arr[-1]
         self._last_time = time_arr[-1]
 
-    def append_events(
-        self,
-        time,
-        kind,
-        i,
-        j,
-        normal_impulse,
-        tangential_impulse,
-        e_n,
-        stage,
-        regime,
-    ) -> None:
+    def append_events(self, events) -> None:
         """Append a block of E logged events (E may be 0) and flush the file.
 
         Args:
-            time: Event times [s], shape (E,).
-            kind: Event kind codes, shape (E,), int8.
-            i: First particle, shape (E,), int64.
-            j: Partner particle (or wall code), shape (E,), int64.
-            normal_impulse: Normal impulse [N s], shape (E,).
-            tangential_impulse: Tangential impulse [N s], shape (E,).
-            e_n: Normal coefficient of restitution of the impact, shape (E,).
-            stage: Normal-model stage code, shape (E,), int8.
-            regime: Tangential regime code, shape (E,), int8.
+            events: Every field of :data:`EVENT_FIELDS`, shape (E,), as the attributes of an
+                object (:class:`hsgran.engine.EventBlock`) or the entries of a mapping.
 
         Raises:
             ValueError: The writer was created with ``log_events=False`` or is closed, or a
-                shape does not match.
+                field is missing, unknown (in a mapping) or of the wrong shape.
         """
         self._check_open()
         if self._events is None:
             raise ValueError("append_events: this writer was created with log_events=False")
-        given = {
-            "time": time,
-            "kind": kind,
-            "i": i,
-            "j": j,
-            "normal_impulse": normal_impulse,
-            "tangential_impulse": tangential_impulse,
-            "e_n": e_n,
-            "stage": stage,
-            "regime": regime,
-        }
-        n_new = np.shape(time)[0] if np.ndim(time) == 1 else -1
+        get = _block_fields(events, tuple(EVENT_FIELDS), "events")
+        given = {name: get(name) for name in EVENT_FIELDS}
+        for name, value in given.items():
+            if value is None:
+                raise ValueError(_optional_message(name, None, True))
+        n_new = np.shape(given["time"])[0] if np.ndim(given["time"]) == 1 else -1
         if n_new < 0:
-            raise ValueError(f"time: expected shape (E,), got {np.shape(time)}")
+            raise ValueError(f"time: expected shape (E,), got {np.shape(given['time'])}")
         arrays = {
             name: _checked(given[name], name, (n_new,), dtype)
             for name, (dtype, _unit) in EVENT_FIELDS.items()
@@ -784,6 +810,9 @@ class StoredCheckpoint:
         complete: Whether the file was closed as complete.
         creator_args: Command line of the run.
         overrides: Key path → value changes of the scene the run used.
+        hsgran_version: hsgran version that wrote the file.
+        pair_table: The engine's pair table of the run (see :class:`Trajectory`), or ``None``
+            when the file does not hold it.
     """
 
     arrays: dict
@@ -797,6 +826,8 @@ class StoredCheckpoint:
     complete: bool
     creator_args: str
     overrides: dict
+    hsgran_version: str = ""
+    pair_table: np.ndarray | None = None
 
 
 def read_checkpoint(path) -> StoredCheckpoint:
@@ -826,7 +857,9 @@ def read_checkpoint(path) -> StoredCheckpoint:
                 scene_text=_text(params["scene_text"]), log_events=EVENTS in f,
                 complete=bool(params.get("complete", False)),
                 creator_args=_text(params.get("creator_args", "")),
-                overrides=json.loads(_text(params.get("overrides", "{}"))))
+                overrides=json.loads(_text(params.get("overrides", "{}"))),
+                hsgran_version=_text(params["version"]),
+                pair_table=_read_pair_table(f[PARAMETERS]))
         except DAMAGED as exc:
             if isinstance(exc, InputError):
                 raise
@@ -849,32 +882,23 @@ def copy_frames(path, writer: TrajectoryWriter, frames: int, events: int) -> Non
     path = os.fspath(path)
     with _open_trajectory(path) as f:
         try:
-            particles, observables = f[PARTICLES], f[OBSERVABLES]
-            energy = {arg: observables[name]["value"] for name, arg in ENERGY_OBSERVABLES.items()
-                      if name in observables}
-            has_w = "angular_velocity" in particles
-            has_s = "motion_state" in particles
-            if particles["position/step"].shape[0] < frames:
+            clock = f[FRAME_FIELDS[CLOCK].path]
+            if clock["step"].shape[0] < frames:
                 raise InputError(f"{path} has fewer frames than its checkpoint follows")
+            values = _stored_frame_fields(f)
             frame_bytes = sum(d.dtype.itemsize * int(np.prod(d.shape[1:]))
-                              for d in (particles["position/value"], particles["velocity/value"]))
-            block = max(1, COPY_BYTES // (2 * frame_bytes))  # the spins, states: at most as much
+                              for d in values.values())
+            block = max(1, COPY_BYTES // frame_bytes)
             for a in range(0, frames, block):
                 b = min(frames, a + block)
-                writer.append_frames(
-                    particles["position/step"][a:b], particles["position/time"][a:b],
-                    particles["position/value"][a:b], particles["velocity/value"][a:b],
-                    particles["angular_velocity/value"][a:b] if has_w else None,
-                    energy["kinetic_translational"][a:b],
-                    energy["kinetic_rotational"][a:b] if has_w else None,
-                    energy["potential"][a:b], energy["dissipated"][a:b],
-                    motion_state=particles["motion_state/value"][a:b] if has_s else None)
+                writer.append_frames({"step": clock["step"][a:b], "time": clock["time"][a:b],
+                                      **{name: d[a:b] for name, d in values.items()}})
             if events:
                 group = f[EVENTS]
                 rows = COPY_BYTES // sum(np.dtype(t).itemsize for t, _ in EVENT_FIELDS.values())
                 for a in range(0, events, rows):
                     b = min(events, a + rows)
-                    writer.append_events(*(group[name][a:b] for name in EVENT_FIELDS))
+                    writer.append_events({name: group[name][a:b] for name in EVENT_FIELDS})
         except DAMAGED as exc:
             if isinstance(exc, InputError):
                 raise
@@ -938,25 +962,28 @@ def _check_size(f: h5py.File, path: str) -> None:
                          "read it in parts with h5py)")
 
 
+def _stored_frame_fields(f: h5py.File) -> dict:
+    """The ``value`` dataset of every field of :data:`FRAME_FIELDS` the file has, by name (a
+    field without a switch is required: its absence raises ``KeyError``, a damaged file)."""
+    return {name: f[spec.path]["value"] for name, spec in FRAME_FIELDS.items()
+            if spec.switch is None or spec.path in f}
+
+
 def _read(f: h5py.File) -> Trajectory:
     particles = f[PARTICLES]
-    position = particles["position"]
-    elements = [position, particles["velocity"]]
-    has_angular = "angular_velocity" in particles
-    if has_angular:
-        elements.append(particles["angular_velocity"])
-    has_state = "motion_state" in particles
-    if has_state:
-        elements.append(particles["motion_state"])
+    clock = f[FRAME_FIELDS[CLOCK].path]
+    stored = _stored_frame_fields(f)
+    series = [clock["step"], clock["time"], *stored.values()]
     if "edges" in particles["box"]:
-        elements.append(particles["box/edges"])
-    observables = f[OBSERVABLES]
-    names = [name for name in ENERGY_OBSERVABLES if name in observables]
-    elements.extend(observables[name] for name in names)
-    n_frames = min(
-        [position["step"].shape[0], position["time"].shape[0]]
-        + [element["value"].shape[0] for element in elements]
-    )
+        series.append(particles["box/edges/value"])
+    n_frames = min(d.shape[0] for d in series)
+    values = {name: d[:n_frames] for name, d in stored.items()}
+    # elements under particles/all are Trajectory attributes (absent: None), observables go
+    # to Trajectory.energies by their name in the file
+    per_particle = {name: values.get(name) for name, spec in FRAME_FIELDS.items()
+                    if spec.path.startswith(PARTICLES + "/")}
+    energies = {observable: values[name] for observable, name in ENERGY_OBSERVABLES.items()
+                if name in values}
 
     params = f[PARAMETERS].attrs
     boundary = [_text(b) for b in particles["box"].attrs["boundary"]]
@@ -966,11 +993,9 @@ def _read(f: h5py.File) -> Trajectory:
         n_events = min(group[name].shape[0] for name in EVENT_FIELDS)
         events = {name: group[name][:n_events] for name in EVENT_FIELDS}
     return Trajectory(
-        time=position["time"][:n_frames],
-        step=position["step"][:n_frames],
-        position=position["value"][:n_frames],
-        velocity=particles["velocity/value"][:n_frames],
-        angular_velocity=particles["angular_velocity/value"][:n_frames] if has_angular else None,
+        time=clock["time"][:n_frames],
+        step=clock["step"][:n_frames],
+        **per_particle,
         radius=particles["radius"][()],
         mass=particles["mass"][()],
         material=particles["species"][()],
@@ -978,7 +1003,7 @@ def _read(f: h5py.File) -> Trajectory:
         box_lower=np.asarray(params["box_lower"]) if "box_lower" in params else None,
         box_upper=np.asarray(params["box_upper"]) if "box_upper" in params else None,
         periodic=tuple(b == "periodic" for b in boundary),
-        energies={name: observables[name]["value"][:n_frames] for name in names},
+        energies=energies,
         events=events,
         scene_text=_text(params["scene_text"]),
         effects=[_text(s) for s in params["effects"]],
@@ -987,8 +1012,23 @@ def _read(f: h5py.File) -> Trajectory:
         summary=json.loads(_text(params["summary"])) if "summary" in params else {},
         complete=bool(params.get("complete", False)),
         creator_args=_text(params.get("creator_args", "")),
-        motion_state=particles["motion_state/value"][:n_frames] if has_state else None,
+        walls=_read_walls(f[PARAMETERS]),
+        scene_name=_text(params.get("scene_name", "")),
+        overrides=json.loads(_text(params.get("overrides", "{}"))),
+        pair_table=_read_pair_table(f[PARAMETERS]),
     )
+
+
+def _read_walls(parameters: h5py.Group) -> Walls | None:
+    if WALLS not in parameters:
+        return None
+    group = parameters[WALLS]
+    return Walls(point=group["point"][()], normal=group["normal"][()],
+                 material=group["material"][()], key=[_text(k) for k in group["key"][()]])
+
+
+def _read_pair_table(parameters: h5py.Group) -> np.ndarray | None:
+    return parameters[PAIR_TABLE][()] if PAIR_TABLE in parameters else None
 
 
 # -- helpers ------------------------------------------------------------------------------
@@ -1004,6 +1044,23 @@ def _create_value(group, row_shape, dtype, unit):
         maxshape=(None, *row_shape),
         dtype=dtype,
         chunks=(rows, *row_shape),
+        compression=COMPRESSION,
+        shuffle=True,
+    )
+    if unit is not None:
+        _set_unit(dset, unit)
+    return dset
+
+
+def _create_series(group, name: str, dtype, unit):
+    """A resizable, chunked, compressed 1-D dataset that grows by appends (step, time, the
+    event log)."""
+    dset = group.create_dataset(
+        name,
+        shape=(0,),
+        maxshape=(None,),
+        dtype=dtype,
+        chunks=(SERIES_CHUNK_ROWS,),
         compression=COMPRESSION,
         shuffle=True,
     )
@@ -1034,11 +1091,39 @@ def _check_non_decreasing(values: np.ndarray, last, name: str) -> None:
         raise ValueError(f"{name}: frames must be appended in non-decreasing {name}")
 
 
-def _optional_message(name: str, enabled: bool) -> str:
-    flag = "motion_state" if name == "motion_state" else "angular_velocity"
+def _optional_message(name: str, switch: str | None, enabled: bool) -> str:
+    if switch is None:
+        return f"{name}: required"
     if enabled:
-        return f"{name}: required, the writer was created with {flag}=True"
-    return f"{name}: must be None, the writer was created with {flag}=False"
+        return f"{name}: required, the writer was created with {switch}=True"
+    return f"{name}: must be None, the writer was created with {switch}=False"
+
+
+def _block_fields(block, names: tuple, what: str):
+    """A function giving a block's field by name (``None`` if absent); the block is an object
+    with the fields as attributes or a mapping, whose keys must all be ``names`` (a typo would
+    otherwise read as a field left out)."""
+    if isinstance(block, Mapping):
+        unknown = sorted(set(block) - set(names))
+        if unknown:
+            raise ValueError(f"{what}: unknown field {unknown[0]!r}; known: {', '.join(names)}")
+        return block.get
+    return lambda name: getattr(block, name, None)
+
+
+def _checked_walls(walls: Walls, n_materials: int) -> Walls:
+    p = len(walls.point)
+    point = _checked(walls.point, "walls.point", (p, 3), np.float64)
+    normal = _checked(walls.normal, "walls.normal", (p, 3), np.float64)
+    material = _checked(walls.material, "walls.material", (p,), np.int32)
+    if not (np.all(np.isfinite(point)) and np.all(np.isfinite(normal))):
+        raise ValueError("walls: points and normals must be finite")
+    if p and (material.min() < 0 or material.max() >= n_materials):
+        raise ValueError(f"walls.material: indices must lie in [0, {n_materials}) "
+                         "(one per material name)")
+    if len(walls.key) != p:
+        raise ValueError(f"walls.key: expected {p} key paths, got {len(walls.key)}")
+    return Walls(point, normal, material, [str(k) for k in walls.key])
 
 
 def _seed_attribute(seed):

@@ -17,7 +17,7 @@ import pytest
 
 from hsgran.errors import InputError
 from hsgran.io import Trajectory, TrajectoryWriter, read_trajectory
-from hsgran.io.h5md import ENERGY_OBSERVABLES, EVENT_FIELDS
+from hsgran.io.h5md import ENERGY_OBSERVABLES, EVENT_FIELDS, FRAME_FIELDS, Walls
 
 N = 7
 BLOCKS = (3, 1, 5)  # frames per appended block: uneven on purpose
@@ -94,10 +94,10 @@ def write_file(path, *, angular=True, events=True, box=True, periodic=(True, Fal
     args = writer_args(angular=angular, events=events, box=box, periodic=periodic)
     with TrajectoryWriter(path, **args) as writer:
         for block in blocks:
-            writer.append_frames(**block)
+            writer.append_frames(block)
         if events:
             for block in event_blocks:
-                writer.append_events(**block)
+                writer.append_events(block)
         writer.set_summary({"events": np.int64(10), "wall_time": 1.5, "e": np.array([1.0, 2.0])})
     return args, blocks, event_blocks
 
@@ -168,7 +168,7 @@ def test_empty_blocks_and_zero_frames(tmp_path):
     path = tmp_path / "empty.h5"
     args = writer_args(angular=False)
     with TrajectoryWriter(path, **args) as writer:
-        writer.append_frames(
+        writer.append_frames(dict(
             step=np.empty(0, np.int64),
             time=np.empty(0),
             position=np.empty((0, N, 3)),
@@ -178,8 +178,8 @@ def test_empty_blocks_and_zero_frames(tmp_path):
             kinetic_rotational=None,
             potential=np.empty(0),
             dissipated=np.empty(0),
-        )
-        writer.append_events(**make_events(0))
+        ))
+        writer.append_events(make_events(0))
         assert writer.n_frames == 0
     traj = read_trajectory(path)
     assert traj.position.shape == (0, N, 3)
@@ -318,7 +318,7 @@ def test_writer_dropped_without_close_still_reads(tmp_path):
     writer = TrajectoryWriter(path, **writer_args())
     blocks = make_blocks()
     for block in blocks[:2]:
-        writer.append_frames(**block)
+        writer.append_frames(block)
     del writer
     gc.collect()
     traj = read_trajectory(path)
@@ -337,8 +337,8 @@ def test_writer_killed_with_sigkill_leaves_a_readable_file(tmp_path):
         from hsgran.io import TrajectoryWriter
         writer = TrajectoryWriter({str(path)!r}, **writer_args())
         for block in make_blocks()[:2]:
-            writer.append_frames(**block)
-        writer.append_events(**make_events(4))
+            writer.append_frames(block)
+        writer.append_events(make_events(4))
         print("appended", flush=True)
         time.sleep(60)
         """
@@ -384,7 +384,7 @@ def test_exception_in_with_block_leaves_file_incomplete(tmp_path):
 
     def failing_run():
         with TrajectoryWriter(path, **writer_args()) as writer:
-            writer.append_frames(**blocks[0])
+            writer.append_frames(blocks[0])
             raise RuntimeError("engine failed")
 
     with pytest.raises(RuntimeError, match="engine failed"):
@@ -402,21 +402,21 @@ def test_writer_rejects_mismatched_arrays(tmp_path):
     with TrajectoryWriter(tmp_path / "w.h5", **writer_args(events=False)) as writer:
         bad = dict(blocks[0], position=blocks[0]["position"][:, :-1])
         with pytest.raises(ValueError, match="position"):
-            writer.append_frames(**bad)
+            writer.append_frames(bad)
         with pytest.raises(ValueError, match="angular_velocity"):
-            writer.append_frames(**dict(blocks[0], angular_velocity=None))
+            writer.append_frames(dict(blocks[0], angular_velocity=None))
         with pytest.raises(ValueError, match="motion_state=True"):
-            writer.append_frames(**dict(blocks[0], motion_state=None))
+            writer.append_frames(dict(blocks[0], motion_state=None))
         with pytest.raises(ValueError, match="motion_state"):
-            writer.append_frames(**dict(blocks[0], motion_state=blocks[0]["motion_state"][:1]))
+            writer.append_frames(dict(blocks[0], motion_state=blocks[0]["motion_state"][:1]))
         with pytest.raises(ValueError, match="log_events=False"):
-            writer.append_events(**make_events(2))
-        writer.append_frames(**blocks[1])
+            writer.append_events(make_events(2))
+        writer.append_frames(blocks[1])
         with pytest.raises(ValueError, match="non-decreasing"):
-            writer.append_frames(**blocks[0])
+            writer.append_frames(blocks[0])
         assert writer.n_frames == BLOCKS[1]
     with pytest.raises(ValueError, match="closed"):
-        writer.append_frames(**blocks[2])
+        writer.append_frames(blocks[2])
     writer.close()  # a second close does nothing
 
 
@@ -427,6 +427,110 @@ def test_writer_rejects_bad_setup(tmp_path):
         TrajectoryWriter(tmp_path / "b.h5", **dict(writer_args(), material_names=["glass"]))
     with pytest.raises(InputError, match="cannot create"):
         TrajectoryWriter(tmp_path / "no" / "such" / "dir.h5", **writer_args())
+
+
+
+def test_the_frame_table_lists_every_field_of_the_engines_blocks():
+    # a field added to a block but not to the table (or the reverse) is caught here
+    from dataclasses import fields
+
+    from hsgran.engine import EventBlock, FrameBlock
+
+    assert {f.name for f in fields(FrameBlock)} == {"step", "time", *FRAME_FIELDS}
+    assert {f.name for f in fields(EventBlock)} == set(EVENT_FIELDS)
+    trajectory_fields = {f.name for f in fields(Trajectory)}
+    for name, spec in FRAME_FIELDS.items():
+        if spec.path.startswith("particles/all/"):
+            assert name in trajectory_fields, name
+
+
+def test_the_writer_takes_the_engines_blocks(tmp_path):
+    from hsgran.engine import EventBlock, FrameBlock
+
+    path = tmp_path / "blocks.h5"
+    blocks = make_blocks()
+    events = make_events(5)
+    with TrajectoryWriter(path, **writer_args()) as writer:
+        for block in blocks:
+            writer.append_frames(FrameBlock(**block))
+        writer.append_events(EventBlock(**events))
+    traj = read_trajectory(path)
+    for name in ("position", "velocity", "angular_velocity", "motion_state"):
+        np.testing.assert_array_equal(getattr(traj, name), concat(blocks, name), strict=True)
+    for observable, name in ENERGY_OBSERVABLES.items():
+        np.testing.assert_array_equal(traj.energies[observable], concat(blocks, name))
+    for name, (dtype, _unit) in EVENT_FIELDS.items():
+        np.testing.assert_array_equal(traj.events[name], events[name].astype(dtype))
+
+
+def test_a_mapping_with_an_unknown_or_missing_field_is_refused(tmp_path):
+    block = make_blocks()[0]
+    with TrajectoryWriter(tmp_path / "w.h5", **writer_args()) as writer:
+        with pytest.raises(ValueError, match="unknown field 'positon'"):
+            writer.append_frames(dict(block, positon=block["position"]))
+        without = {k: v for k, v in block.items() if k != "dissipated"}
+        with pytest.raises(ValueError, match="dissipated: required"):
+            writer.append_frames(without)
+        events = make_events(3)
+        del events["regime"]
+        with pytest.raises(ValueError, match="regime: required"):
+            writer.append_events(events)
+        assert writer.n_frames == 0
+        assert writer.n_events == 0
+
+
+def floor_and_ramp():
+    """Two walls: a floor of material 0 and a tilted ramp of material 1."""
+    return Walls(point=np.array([[0.0, 0.0, 0.0], [0.05, 0.0, 0.01]]),
+                 normal=np.array([[0.0, 0.0, 1.0], [-0.6, 0.0, 0.8]]),
+                 material=np.array([0, 1]), key=["walls[0]", "walls[1]"])
+
+
+def test_walls_pair_table_and_scene_name_round_trip(tmp_path):
+    path = tmp_path / "walls.h5"
+    walls = floor_and_ramp()
+    table = np.random.default_rng(3).normal(size=(2, 2, 14))
+    table[1, 1] = np.nan  # two rigid walls: no contact law
+    with TrajectoryWriter(path, **writer_args(), walls=walls, pair_table=table,
+                          scene_name="ramp", overrides={"walls[1].normal": [-0.6, 0.0, 0.8]}):
+        pass
+    traj = read_trajectory(path)
+    np.testing.assert_array_equal(traj.walls.point, walls.point, strict=True)
+    np.testing.assert_array_equal(traj.walls.normal, walls.normal, strict=True)
+    np.testing.assert_array_equal(traj.walls.material, [0, 1])
+    assert traj.walls.key == ["walls[0]", "walls[1]"]
+    assert traj.scene_name == "ramp"
+    assert traj.overrides == {"walls[1].normal": [-0.6, 0.0, 0.8]}
+    np.testing.assert_array_equal(traj.pair_table, table, strict=True)
+    with h5py.File(path, "r") as f:
+        group = f["parameters/hsgran/walls"]
+        assert set(group) == {"point", "normal", "material", "key"}
+        assert group["point"].attrs["unit"] == "m"
+        assert f["parameters/hsgran/pair_table"].shape == (2, 2, 14)
+
+
+def test_no_walls_differs_from_walls_not_stored(tmp_path):
+    with TrajectoryWriter(tmp_path / "none.h5", **writer_args(), walls=Walls.of([])):
+        pass
+    with TrajectoryWriter(tmp_path / "old.h5", **writer_args()):
+        pass
+    empty = read_trajectory(tmp_path / "none.h5").walls
+    assert len(empty) == 0
+    assert empty.point.shape == (0, 3)
+    old = read_trajectory(tmp_path / "old.h5")
+    assert old.walls is None
+    assert old.pair_table is None
+    assert old.scene_name == ""
+
+
+def test_bad_walls_and_pair_table_are_refused(tmp_path):
+    walls = floor_and_ramp()
+    walls.material[1] = 2  # only two material names
+    with pytest.raises(ValueError, match="walls.material"):
+        TrajectoryWriter(tmp_path / "a.h5", **writer_args(), walls=walls)
+    with pytest.raises(ValueError, match="pair_table"):
+        TrajectoryWriter(tmp_path / "b.h5", **writer_args(), pair_table=np.zeros((3, 3, 14)))
+    assert not list(tmp_path.iterdir())  # refused before any file was made
 
 
 # -- MDAnalysis ---------------------------------------------------------------------------------
