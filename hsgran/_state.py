@@ -7,12 +7,19 @@ and a reader sees what each array is. The groups, and every field's role, are li
 - which fields a checkpoint holds (``STORED``): everything the loop reads and writes between
   events; not the scratch space it overwrites before reading, nor the event calendar (rebuilt
   from the pending events) or the frame and log buffers (empty at every checkpoint);
-- the checkpoint's dataset names: the field names, which are unique across groups.
+- the checkpoint's dataset names: the field names, which are unique across groups;
+- how each field is allocated (:data:`FIELDS`: dtype, shape in terms of the scene's sizes,
+  initial value, and whether it is one of the per-sphere record fields that large systems pack
+  into :data:`SPHERE_RECORD`): :func:`allocate` makes every array of a run from that table,
+  and :class:`hsgran.engine.Simulation` then fills in the scene's values.
 """
 
 from __future__ import annotations
 
 from collections import namedtuple
+from dataclasses import dataclass
+
+import numpy as np
 
 #: What a prediction needs of every sphere. ``st``: one 64-byte row per sphere (``S_*`` columns
 #: of hsgran._loop: position [m], velocity [m/s], local time [s], radius [m]); ``counter``:
@@ -114,3 +121,193 @@ S_V = 3  #: velocity at the local time [m/s] (columns 3–5)
 S_T = 6  #: local time: the stored state is valid at this instant [s]
 S_R = 7  #: radius [m]
 S_WIDTH = 8
+
+
+# ---- allocation ----------------------------------------------------------------------------
+
+#: Cache-line size [bytes] to which the per-sphere rows and records are aligned.
+CACHE_LINE = 64
+
+#: Each sphere's bookkeeping in one record of two cache lines (from LARGE_FROM spheres on, see
+#: hsgran.engine), so that an event on a sphere fetches it in one go instead of one line from
+#: each of a dozen arrays (at N = 10⁶ these arrays do not fit the cache and every separate array
+#: costs a miss). The loop sees each field as an array of its own (a strided view), so its code
+#: is the same as with separate arrays. First line: the pending event and the kept pair contact
+#: (read at every pop and prediction); second line: the sphere's constants, collision history,
+#: calendar position (``where``, ``qnext``, ``qprev``: hsgran.events.calendar) and cell.
+SPHERE_RECORD = np.dtype({
+    "names": ["ev_t", "ev_seq", "ev_pcount", "counter", "pc_t", "pc_count", "ev_partner",
+              "pc_partner", "ev_kind", "inv_m", "inv_i", "t_last", "where", "mat", "zstreak",
+              "rapid", "cell", "qnext", "qprev"],
+    "formats": ["f8", "i8", "i8", "i8", "f8", "i8", "i4", "i4", "i1", "f8", "f8", "f8", "i8",
+                "i4", "i4", "i4", ("i4", (3,)), "i4", "i4"],
+    "offsets": [0, 8, 16, 24, 32, 40, 48, 52, 56, 64, 72, 80, 88, 96, 100, 104, 108, 120, 124],
+    "itemsize": 2 * CACHE_LINE})
+
+#: Fewest entries of a record field that the loop sees: numpy calls an array of one element
+#: contiguous whatever its stride, and numba would compile a second loop for a one-sphere scene
+#: (or for the one-entry dummies); below this the entries beyond the spheres are unused.
+FIELD_MIN = 2
+
+
+@dataclass(frozen=True)
+class Sizes:
+    """The sizes every field's shape is made of (:data:`FIELDS`)."""
+
+    n: int  #: spheres
+    gravity: bool  #: the scene has gravity (motion states, on-plane segments)
+    rotation: bool  #: spins are tracked
+    planes: int  #: planes
+    cells: int  #: cells of the grid
+    row: int  #: length of a pair-table row (hsgran.materials P_*)
+    frames: int  #: frames in the frame buffer
+    log: int  #: entries in the event-log buffer
+
+    def value(self, symbol) -> int:
+        """The size a shape symbol stands for (an int stands for itself)."""
+        if isinstance(symbol, int):
+            return symbol
+        n, g, r = self.n, self.gravity, self.rotation
+        return {
+            "n": n,
+            "m": max(n, FIELD_MIN),  # per-sphere record fields the loop sees
+            "e": n + 1,  # event entries: every sphere and the frame tick
+            "g": n if g else 1,  # per sphere with gravity only
+            "gr": n if g and r else 1,  # per sphere with gravity and rotation
+            "r": n if r else 1,  # per sphere with rotation only
+            "c": max(1 if g else n, FIELD_MIN),  # kept pair contacts: without gravity only
+            "planes": self.planes, "cells": self.cells, "row": self.row,
+            "frames": self.frames, "log": self.log,
+            "fr": self.frames if r else 1,  # spin frames: with rotation only
+            "nr": n if r else 1,
+        }[symbol]
+
+
+@dataclass(frozen=True)
+class Field:
+    """How one array of the engine state is allocated."""
+
+    group: str  #: the named tuple it belongs to (``Flight`` …), or "calendar"
+    name: str
+    dtype: str
+    shape: tuple  #: of :meth:`Sizes.value` symbols and ints
+    fill: float = 0  #: initial value
+    packed: bool = False  #: a :data:`SPHERE_RECORD` field (packed in records for large systems)
+    aligned: bool = False  #: rows start on a cache-line boundary
+
+
+def _f(group, name, dtype, shape, fill=0, packed=False, aligned=False):
+    return Field(group, name, dtype, shape, fill, packed, aligned)
+
+
+#: Every array of the engine state: the fields of the groups, in the groups' order, and the
+#: calendar's per-entry links. One entry per array, so a new field is one line here (and one
+#: name in its group).
+FIELDS = (
+    _f("Flight", "st", "f8", ("n", 8), aligned=True),
+    _f("Flight", "counter", "i8", ("m",), packed=True),
+    _f("Flight", "acc", "f8", ("g", 3)),
+    _f("Flight", "mstate", "i1", ("g",)),
+    _f("Flight", "mplane", "i4", ("g",), fill=-1),
+    _f("Flight", "seg_end", "f8", ("g",), fill=np.inf),
+    _f("Flight", "seg_code", "i1", ("g",)),
+    _f("Flight", "pc_t", "f8", ("c",), fill=np.inf, packed=True),
+    _f("Flight", "pc_partner", "i4", ("c",), fill=-1, packed=True),
+    _f("Flight", "pc_count", "i8", ("c",), packed=True),
+    _f("Dyn", "omg", "f8", ("r", 3)),
+    _f("Dyn", "inv_m", "f8", ("m",), packed=True),
+    _f("Dyn", "inv_i", "f8", ("m",), packed=True),
+    _f("Dyn", "mat", "i4", ("m",), packed=True),
+    _f("Dyn", "zstreak", "i4", ("m",), packed=True),
+    _f("Dyn", "alpha", "f8", ("gr", 3)),
+    _f("Dyn", "seg_dir", "f8", ("g", 3)),
+    _f("Dyn", "t_last", "f8", ("m",), fill=-np.inf, packed=True),
+    _f("Dyn", "row_tc", "f8", ("row",)),
+    _f("Dyn", "rapid", "i4", ("m",), packed=True),
+    _f("Walls", "planes_p", "f8", ("planes", 3)),
+    _f("Walls", "planes_n", "f8", ("planes", 3)),
+    _f("Walls", "planes_mat", "i8", ("planes",)),
+    _f("Walls", "planes_vel", "f8", ("planes", 3)),
+    _f("Walls", "planes_omg", "f8", ("planes", 3)),
+    _f("Space", "gravity", "f8", (3,)),
+    _f("Space", "box_len", "f8", (3,)),
+    _f("Space", "periodic", "?", (3,)),
+    _f("Grid", "origin", "f8", (3,)),
+    _f("Grid", "csize", "f8", (3,)),
+    _f("Grid", "ncell", "i8", (3,)),
+    _f("Grid", "cell", "i4", ("m", 3), packed=True),
+    _f("Grid", "head", "i4", ("cells",), fill=-1),
+    _f("Grid", "nxt", "i4", ("n",), fill=-1),
+    _f("Grid", "prv", "i4", ("n",), fill=-1),
+    _f("Grid", "heads", "i4", (27,)),
+    _f("Grid", "shifts", "f8", (27, 3)),
+    _f("Grid", "ac", "i8", (3, 3)),
+    _f("Grid", "ah", "f8", (3, 3)),
+    _f("Grid", "stack", "i4", ("g",)),
+    _f("Sched", "ev_t", "f8", ("e",), fill=np.inf, packed=True),
+    _f("Sched", "ev_seq", "i8", ("e",), packed=True),
+    _f("Sched", "ev_kind", "i1", ("e",), packed=True),
+    _f("Sched", "ev_partner", "i4", ("e",), fill=-1, packed=True),
+    _f("Sched", "ev_pcount", "i8", ("e",), packed=True),
+    _f("calendar", "where", "i8", ("e",), packed=True),
+    _f("calendar", "qnext", "i4", ("e",), packed=True),
+    _f("calendar", "qprev", "i4", ("e",), packed=True),
+    _f("Out", "fr_time", "f8", ("frames",)),
+    _f("Out", "fr_pos", "f8", ("frames", "n", 3)),
+    _f("Out", "fr_vel", "f8", ("frames", "n", 3)),
+    _f("Out", "fr_omg", "f8", ("fr", "nr", 3)),
+    _f("Out", "log_f", "f8", ("log", 4)),
+    _f("Out", "log_i", "i8", ("log", 5)),
+    _f("Out", "fr_ms", "i1", ("frames", "n")),
+)
+
+
+def _aligned(shape, dtype) -> np.ndarray:
+    """Zeroed array whose first element starts on a cache-line boundary."""
+    count = int(np.prod(shape))
+    item = np.dtype(dtype).itemsize
+    buf = np.zeros(count * item + CACHE_LINE, dtype=np.uint8)
+    off = -buf.ctypes.data % CACHE_LINE
+    return buf[off:off + count * item].view(dtype).reshape(shape)
+
+
+def _records(count: int) -> np.ndarray:
+    """Zeroed :data:`SPHERE_RECORD` array whose first record starts a cache-line pair."""
+    size = SPHERE_RECORD.itemsize
+    buf = np.zeros((count + 1) * size, dtype=np.uint8)
+    off = -buf.ctypes.data % size
+    return buf[off:off + count * size].view(SPHERE_RECORD)
+
+
+def allocate(sizes: Sizes, packed: bool) -> dict:
+    """Every array of :data:`FIELDS`, by name, at its initial value.
+
+    Args:
+        sizes: The scene's sizes.
+        packed: Pack the record fields into one :data:`SPHERE_RECORD` per entry (large
+            systems; the loop then sees strided views), else one array per field.
+
+    Returns:
+        Arrays by field name (the calendar's links included).
+    """
+    rec = _records(max(sizes.value("m"), sizes.value("e"))) if packed else None
+    arrays = {}
+    for f in FIELDS:
+        shape = tuple(sizes.value(s) for s in f.shape)
+        if f.packed and packed:
+            a = rec[f.name][:shape[0]]
+        elif f.aligned:
+            a = _aligned(shape, f.dtype)
+        else:
+            a = np.zeros(shape, dtype=f.dtype)
+        if f.fill:
+            a[...] = f.fill
+        arrays[f.name] = a
+    return arrays
+
+
+def groups_of(arrays: dict, calendar) -> tuple:
+    """The seven group tuples (:data:`GROUPS`) over ``arrays`` (by field name) and the event
+    calendar; the tuples hold references, so the compiled loop updates the arrays in place."""
+    return tuple(group(*(calendar if name == "cal" else arrays[name] for name in group._fields))
+                 for group in GROUPS)

@@ -40,7 +40,7 @@ import numpy as np
 from hsgran import _loop as ev
 from hsgran import _state as es
 from hsgran._flight import MAX_ZERO_TIME_EVENTS
-from hsgran._state import Dyn, Flight, Grid, Out, Sched, Space, Walls, stored_fields
+from hsgran._state import FIELDS, Sizes, allocate, groups_of, stored_fields
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.calendar import calendar_build, new_calendar
@@ -160,41 +160,6 @@ def _mechanical(kin_t, kin_r, pot):
     return kin_t + (kin_r if kin_r is not None else 0.0) + pot
 
 
-#: Cache-line size [bytes] to which the per-sphere rows are aligned.
-CACHE_LINE = 64
-
-
-def _aligned_rows(n: int, width: int) -> np.ndarray:
-    """Zeroed float64 array (n, width) whose first row starts on a cache-line boundary."""
-    pad = CACHE_LINE // 8
-    buf = np.zeros(n * width + pad)
-    off = (-buf.ctypes.data % CACHE_LINE) // 8
-    return buf[off:off + n * width].reshape(n, width)
-
-
-#: Each sphere's bookkeeping in one record of two cache lines (from LARGE_FROM spheres on),
-#: so that an event on a sphere fetches it in one go instead of one line from each of a dozen
-#: arrays (at N = 10⁶ these arrays do not fit the cache and every separate array costs a miss).
-#: The loop sees each field as an array of its own (a strided view), so its code is the same as
-#: with separate arrays. First line: the pending event and the kept pair contact (read at every
-#: pop and prediction); second line: the sphere's constants, collision history, calendar
-#: position and cell.
-SPHERE_RECORD = np.dtype({
-    "names": ["ev_t", "ev_seq", "ev_pcount", "counter", "pc_t", "pc_count", "ev_partner",
-              "pc_partner", "ev_kind", "inv_m", "inv_i", "t_last", "where", "mat", "zstreak",
-              "rapid", "cell", "qnext", "qprev"],
-    "formats": ["f8", "i8", "i8", "i8", "f8", "i8", "i4", "i4", "i1", "f8", "f8", "f8", "i8",
-                "i4", "i4", "i4", ("i4", (3,)), "i4", "i4"],
-    "offsets": [0, 8, 16, 24, 32, 40, 48, 52, 56, 64, 72, 80, 88, 96, 100, 104, 108, 120, 124],
-    "itemsize": 2 * CACHE_LINE})
-
-
-#: Fewest entries of a record field that the loop sees: numpy calls an array of one element
-#: contiguous whatever its stride, and numba would compile a second loop for a one-sphere scene
-#: (or for the one-entry dummies); below this the entries beyond the spheres are unused.
-FIELD_MIN = 2
-
-
 #: Spheres from which a scene is run as a large system: the per-sphere fields packed in records
 #: (SPHERE_RECORD), an event calendar with time buckets (hsgran.events.calendar) and prefetch
 #: hints in the loop. Below, everything fits the cache: each field is an array of its own, every
@@ -204,17 +169,70 @@ FIELD_MIN = 2
 LARGE_FROM = 1 << 16
 
 
-def _sphere_fields(n: int, packed: bool) -> dict[str, np.ndarray]:
-    """Zeroed arrays of ``n`` entries of every :data:`SPHERE_RECORD` field, by name: fields
-    of one record array whose first record starts a cache-line pair, or separate arrays."""
-    if packed:
-        size = SPHERE_RECORD.itemsize
-        buf = np.zeros((n + 1) * size, dtype=np.uint8)
-        off = -buf.ctypes.data % size
-        rec = buf[off:off + n * size].view(SPHERE_RECORD)
-        return {name: rec[name] for name in SPHERE_RECORD.names}
-    return {name: np.zeros(n, dtype=SPHERE_RECORD.fields[name][0])
-            for name in SPHERE_RECORD.names}
+def _flags(eff, log_events: bool) -> np.ndarray:
+    """The loop's switches (hsgran._state FL_*) for an effect set."""
+    flags = np.zeros(es.FL_SIZE, dtype=np.bool_)
+    for k, on in ((es.FL_PLASTICITY, eff.plasticity), (es.FL_FRICTION, eff.friction),
+                  (es.FL_ROLLING, eff.rolling_resistance), (es.FL_ADHESION, eff.adhesion),
+                  (es.FL_ROTATION, eff.rotation), (es.FL_GRAVITY, eff.gravity),
+                  (es.FL_LOG, log_events)):
+        flags[k] = bool(on)
+    return flags
+
+
+def _grid_plan(scene, brute_force: bool):
+    """(origin [m], cell size [m], cells per axis, box length on periodic axes [m]) of the cell
+    grid (hsgran.events.grid.plan_grid): cells at least one largest diameter wide over the box,
+    or over the spheres when there is none; one cell per axis for the all-pairs mode."""
+    periodic = np.array(scene.periodic, dtype=np.bool_)
+    radius = np.asarray(scene.radius, dtype=np.float64)
+    if scene.box_lower is not None:
+        lower = np.asarray(scene.box_lower, dtype=np.float64)
+        upper = np.asarray(scene.box_upper, dtype=np.float64)
+    else:
+        pos = np.asarray(scene.position, dtype=np.float64)
+        lower = (pos - radius[:, None]).min(axis=0)
+        upper = (pos + radius[:, None]).max(axis=0)
+    box_len = np.where(periodic, upper - lower, 0.0)
+    origin, csize, ncell = plan_grid(lower, upper, periodic, 2.0 * float(radius.max()), scene.n)
+    if brute_force:
+        csize = csize * ncell
+        ncell = np.ones(3, dtype=np.int64)
+    elif np.any(periodic & (ncell < 3)):
+        raise SimulationError("a periodic axis needs at least 3 cells of one largest diameter")
+    return origin, csize, ncell, box_len
+
+
+def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
+    """Write the scene's values into freshly allocated state arrays (hsgran._state.allocate):
+    the spheres' rows, spins, inverse masses, materials, accelerations, the planes, gravity,
+    the periodic axes, and every sphere's cell and place in the cell lists (the grid's
+    geometry, ``origin``, ``csize``, ``ncell``, is already set)."""
+    n = scene.n
+    st = a["st"]
+    st[:, es.S_X:es.S_X + 3] = scene.position
+    st[:, es.S_V:es.S_V + 3] = scene.velocity
+    st[:, es.S_R] = scene.radius
+    radius = st[:, es.S_R]
+    if scene.effects.rotation:
+        a["omg"][:] = scene.angular_velocity
+    a["inv_m"][:n] = 1.0 / mass
+    a["inv_i"][:n] = 1.0 / (SOLID_SPHERE_INERTIA * mass * radius**2)
+    a["mat"][:n] = scene.material
+    a["gravity"][:] = scene.gravity
+    a["acc"][:] = a["gravity"]
+    a["periodic"][:] = scene.periodic
+    planes = list(scene.planes)
+    if planes:
+        a["planes_p"][:] = [p.point for p in planes]
+        a["planes_n"][:] = [p.normal for p in planes]
+        a["planes_mat"][:] = [p.material for p in planes]
+    cell = a["cell"][:n]
+    cell[:] = cell_coordinates(st[:, es.S_X:es.S_X + 3], a["origin"], a["csize"], a["ncell"],
+                               a["periodic"])
+    for i in range(n):
+        insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], a["ncell"]), a["head"], a["nxt"],
+               a["prv"])
 
 
 class Simulation:
@@ -240,104 +258,31 @@ class Simulation:
         self.n = n
         self.rotation = bool(eff.rotation)
         self.log_events = bool(log_events)
-        self.flags = np.zeros(es.FL_SIZE, dtype=np.bool_)
-        for k, on in ((es.FL_PLASTICITY, eff.plasticity), (es.FL_FRICTION, eff.friction),
-                      (es.FL_ROLLING, eff.rolling_resistance), (es.FL_ADHESION, eff.adhesion),
-                      (es.FL_ROTATION, eff.rotation), (es.FL_GRAVITY, eff.gravity),
-                      (es.FL_LOG, self.log_events)):
-            self.flags[k] = bool(on)
-        self.gravity = np.ascontiguousarray(scene.gravity, dtype=np.float64)
-        # one 64-byte row per sphere: position, velocity, local time, radius (hsgran._loop S_*)
-        self.state = _aligned_rows(n, es.S_WIDTH)
-        self.pos = self.state[:, es.S_X:es.S_X + 3]
-        self.vel = self.state[:, es.S_V:es.S_V + 3]
-        self.t_loc = self.state[:, es.S_T]
-        self.radius = self.state[:, es.S_R]
-        self.pos[:] = scene.position
-        self.vel[:] = scene.velocity
-        self.radius[:] = scene.radius
-        self.omg = (np.ascontiguousarray(scene.angular_velocity, dtype=np.float64).copy()
-                    if self.rotation else np.zeros((1, 3)))
-        # one record per sphere (SPHERE_RECORD, packed if large), and one more for the frame
-        # tick's event (entry n); the per-sphere fields are m long (FIELD_MIN)
+        self.flags = _flags(eff, self.log_events)
+        self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)  # [kg]
+        self.inertia = SOLID_SPHERE_INERTIA * self.mass * scene.radius**2  # [kg m²]
+        self.pair_table = np.ascontiguousarray(scene.pair_table())
+        origin, csize, ncell, box_len = _grid_plan(scene, brute_force)
+        per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
+        sizes = Sizes(n=n, gravity=bool(eff.gravity), rotation=self.rotation,
+                      planes=len(scene.planes), cells=int(np.prod(ncell)),
+                      row=self.pair_table.shape[-1],
+                      frames=frame_buffer or max(1, min(FRAME_BUFFER_MAX,
+                                                        FRAME_BUFFER_BYTES // per_frame)),
+                      log=LOG_BUFFER if self.log_events else 1)
         if large is None:
             large = n >= LARGE_FROM
-        m = max(n, FIELD_MIN)
-        rec = _sphere_fields(m + 1, large)
-        self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)
-        self.inv_m = rec["inv_m"][:n]
-        self.inv_m[:] = 1.0 / self.mass
-        self.inv_i = rec["inv_i"][:n]
-        self.inv_i[:] = 1.0 / (SOLID_SPHERE_INERTIA * self.mass * self.radius**2)
-        self.inertia = SOLID_SPHERE_INERTIA * self.mass * self.radius**2  # [kg m²]
+        a = allocate(sizes, packed=large)
+        a["origin"][:], a["csize"][:], a["ncell"][:], a["box_len"][:] = (origin, csize, ncell,
+                                                                          box_len)
+        _fill_from_scene(a, scene, self.mass)
+        # one pending event per sphere, entry n is the frame tick
+        calendar = new_calendar(n + 1, a["where"], a["qnext"], a["qprev"], buckets=large)
+        self._groups = groups_of(a, calendar)
+        self._expose(a, n, calendar)
         #: mechanical energy of the scene as given [J] (before spheres are put on planes)
         self.energy0 = float(_mechanical(*self._energies(
             self.pos[None], self.vel[None], self.omg[None] if self.rotation else None))[0])
-        self.mat = rec["mat"][:n]
-        self.mat[:] = scene.material
-        self.counter = rec["counter"][:n]
-        self.zstreak = rec["zstreak"][:n]
-        # motion states (hsgran.onplane): only with gravity can a sphere rest on a plane
-        ng = n if eff.gravity else 1
-        self.acc = np.tile(self.gravity, (ng, 1))
-        self.alpha = np.zeros((ng if self.rotation else 1, 3))
-        self.mstate = np.zeros(ng, dtype=np.int8)
-        self.mplane = np.full(ng, -1, dtype=np.int32)
-        self.seg_end = np.full(ng, np.inf)
-        self.seg_code = np.zeros(ng, dtype=np.int8)
-        self.seg_dir = np.zeros((ng, 3))
-        # without gravity: each sphere's earliest pair contact at its last prediction
-        # (hsgran._loop._predict)
-        nc = 1 if eff.gravity else n
-        self.pc_t = rec["pc_t"][:nc]
-        self.pc_t[:] = np.inf
-        self.pc_partner = rec["pc_partner"][:nc]
-        self.pc_partner[:] = -1
-        self.pc_count = rec["pc_count"][:nc]
-        self.t_last = rec["t_last"][:n]  # time of each sphere's last collision (TC model)
-        self.t_last[:] = -np.inf
-        self.rapid = rec["rapid"][:n]  # collisions in succession within tc (jams)
-        self.pair_table = np.ascontiguousarray(scene.pair_table())
-        planes = list(scene.planes)
-        self.planes_p = np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3)
-        self.planes_n = np.array([p.normal for p in planes], dtype=np.float64).reshape(-1, 3)
-        self.planes_mat = np.array([p.material for p in planes], dtype=np.int64)
-        self.planes_vel = np.zeros((len(planes), 3))
-        self.planes_omg = np.zeros((len(planes), 3))
-        self.periodic = np.array(scene.periodic, dtype=np.bool_)
-        if scene.box_lower is not None:
-            lower = np.asarray(scene.box_lower, dtype=np.float64)
-            upper = np.asarray(scene.box_upper, dtype=np.float64)
-        else:
-            lower = (self.pos - self.radius[:, None]).min(axis=0)
-            upper = (self.pos + self.radius[:, None]).max(axis=0)
-        self.box_len = np.where(self.periodic, upper - lower, 0.0)
-        cell_min = 2.0 * float(self.radius.max())
-        self.origin, self.csize, self.ncell = plan_grid(lower, upper, self.periodic, cell_min, n)
-        if brute_force:
-            self.csize = self.csize * self.ncell
-            self.ncell = np.ones(3, dtype=np.int64)
-        elif np.any(self.periodic & (self.ncell < 3)):
-            raise SimulationError("a periodic axis needs at least 3 cells of one largest diameter")
-        self.cell = rec["cell"][:n]
-        self.cell[:] = cell_coordinates(self.pos, self.origin, self.csize, self.ncell,
-                                        self.periodic)
-        self.head = np.full(int(np.prod(self.ncell)), -1, dtype=np.int32)
-        self.nxt = np.full(n, -1, dtype=np.int32)
-        self.prv = np.full(n, -1, dtype=np.int32)
-        for i in range(n):
-            insert(i, slot_of(self.cell[i, 0], self.cell[i, 1], self.cell[i, 2], self.ncell),
-                   self.head, self.nxt, self.prv)
-        # one pending event per sphere, entry n is the frame tick
-        self.ev_t = rec["ev_t"][:n + 1]
-        self.ev_t[:] = np.inf
-        self.ev_seq = rec["ev_seq"][:n + 1]
-        self.ev_kind = rec["ev_kind"][:n + 1]
-        self.ev_partner = rec["ev_partner"][:n + 1]
-        self.ev_partner[:] = -1
-        self.ev_pcount = rec["ev_pcount"][:n + 1]
-        self.calendar = new_calendar(n + 1, rec["where"][:n + 1], rec["qnext"][:n + 1],
-                                     rec["qprev"][:n + 1], buckets=large)
         self.fsc = np.zeros(es.F_SIZE)
         self.fsc[es.F_FRAME_DT] = scene.frame_interval
         self.fsc[es.F_LANDING_SPEED] = scene.effective_landing_speed
@@ -348,46 +293,12 @@ class Simulation:
         self.isc[es.I_PEND_A] = self.isc[es.I_PEND_B] = self.isc[es.I_PEND_LAYER] = -1
         self.counts = np.zeros(len(ev.EVENT_NAMES), dtype=np.int64)
         self.rec = np.zeros(REC_SIZE)
-        per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
-        nf = frame_buffer or max(1, min(FRAME_BUFFER_MAX, FRAME_BUFFER_BYTES // per_frame))
-        self.fr_time = np.zeros(nf)
-        self.fr_pos = np.zeros((nf, n, 3))
-        self.fr_vel = np.zeros((nf, n, 3))
-        self.fr_omg = np.zeros((nf, n, 3)) if self.rotation else np.zeros((1, 1, 3))
-        self.fr_ms = np.zeros((nf, n), dtype=np.int8)
-        nl = LOG_BUFFER if self.log_events else 1
-        self.log_f = np.zeros((nl, 4))
-        self.log_i = np.zeros((nl, 5), dtype=np.int64)
         self._frames_emitted = 0
         self._events_emitted = 0
         # the frame tick at t = 0 goes first among simultaneous entries (lowest sequence number)
         self.ev_t[n] = 0.0
         self.ev_seq[n] = 0
         self.isc[es.I_SEQ] = 1
-        # the array groups of hsgran._loop (see its module notes); the tuples hold references,
-        # so the compiled code updates these arrays in place. The loop sees the per-sphere
-        # record fields m ≥ FIELD_MIN long (the attributes above are the first n entries).
-        f = {name: rec[name][:m] for name in ("inv_m", "inv_i", "mat", "counter", "zstreak",
-                                              "t_last", "rapid", "cell")}
-        f.update({name: rec[name][:max(nc, FIELD_MIN)]
-                  for name in ("pc_t", "pc_partner", "pc_count")})
-        self._groups = (
-            Flight(self.state, f["counter"], self.acc, self.mstate, self.mplane, self.seg_end,
-                   self.seg_code, f["pc_t"], f["pc_partner"], f["pc_count"]),
-            Dyn(self.omg, f["inv_m"], f["inv_i"], f["mat"], f["zstreak"], self.alpha,
-                self.seg_dir, f["t_last"], np.zeros(self.pair_table.shape[-1]), f["rapid"]),
-            Walls(self.planes_p, self.planes_n, self.planes_mat, self.planes_vel,
-                  self.planes_omg),
-            Space(self.gravity, self.box_len, self.periodic),
-            Grid(self.origin, self.csize, self.ncell, f["cell"], self.head, self.nxt, self.prv,
-                 np.zeros(27, dtype=np.int32), np.zeros((27, 3)),
-                 np.zeros((3, 3), dtype=np.int64), np.zeros((3, 3)),
-                 np.zeros(n if eff.gravity else 1, dtype=np.int32)),
-            Sched(self.ev_t, self.ev_seq, self.ev_kind, self.ev_partner, self.ev_pcount,
-                  self.calendar),
-            Out(self.fr_time, self.fr_pos, self.fr_vel, self.fr_omg, self.log_f, self.log_i,
-                self.fr_ms),
-        )
         flight, dyn, walls, space, grid, sched, _ = self._groups
         ev.init(flight, dyn, walls, space, grid, sched, self.pair_table, self.fsc, self.isc,
                 self.flags)
@@ -396,6 +307,25 @@ class Simulation:
         # the loop returns before touching any event
         self.fsc[es.F_T_END] = -1.0
         self._call(1)
+
+    def _expose(self, a: dict, n: int, calendar) -> None:
+        """The state arrays as attributes, each with one entry per sphere (per-sphere record
+        fields are longer for the loop, see hsgran._state.FIELD_MIN); views, not copies."""
+        for f in FIELDS:
+            if f.group != "calendar":
+                setattr(self, f.name, a[f.name])
+        for name in ("counter", "inv_m", "inv_i", "mat", "zstreak", "t_last", "rapid", "cell"):
+            setattr(self, name, a[name][:n])
+        nc = 1 if self.scene.effects.gravity else n
+        for name in ("pc_t", "pc_partner", "pc_count"):
+            setattr(self, name, a[name][:nc])
+        self.calendar = calendar
+        # one 64-byte row per sphere: position, velocity, local time, radius (hsgran._state S_*)
+        self.state = a["st"]
+        self.pos = self.state[:, es.S_X:es.S_X + 3]
+        self.vel = self.state[:, es.S_V:es.S_V + 3]
+        self.t_loc = self.state[:, es.S_T]
+        self.radius = self.state[:, es.S_R]
 
     @property
     def time(self) -> float:

@@ -18,13 +18,6 @@ PACKAGE = Path(hsgran.__file__).parent
 #: screens, so a reader can hold all of it in view while checking it.
 MAX_FUNCTION_LINES = 150
 
-#: Over-long functions of modules that issue 24 is restructuring (the compiled loop, the engine);
-#: its split removes them, and then this list must be emptied (the test fails on an entry that
-#: is no longer over long). Keys are ``module:qualified name``, values their length when listed.
-PENDING_ISSUE_24 = {
-    "engine:Simulation.__init__": 164,
-}
-
 LONG_REASON = re.compile(r"#\s*long:\s*\S")
 
 
@@ -69,17 +62,10 @@ def long_functions():
 
 def test_functions_are_short_or_say_why():
     found = long_functions()
-    offenders = sorted(f"{name} ({n} lines)" for name, n in found.items()
-                       if name not in PENDING_ISSUE_24)
+    offenders = sorted(f"{name} ({n} lines)" for name, n in found.items())
     assert not offenders, (
         f"functions longer than {MAX_FUNCTION_LINES} lines without a '# long: <reason>' "
         "comment: " + ", ".join(offenders))
-
-
-def test_pending_list_names_only_functions_still_over_long():
-    found = long_functions()
-    done = sorted(name for name in PENDING_ISSUE_24 if name not in found)
-    assert not done, f"no longer over long (remove from PENDING_ISSUE_24): {done}"
 
 
 def test_a_reason_above_the_decorators_or_before_the_first_statement_is_accepted():
