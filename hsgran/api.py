@@ -18,8 +18,7 @@ import numpy as np
 from hsgran import __version__, materials
 from hsgran.engine import Checkpoint, RunSummary, Simulation, SimulationError
 from hsgran.errors import InputError
-from hsgran.io.h5md import (StoredCheckpoint, TrajectoryWriter, Walls, copy_frames,
-                            read_checkpoint)
+from hsgran.io.h5md import StoredCheckpoint, TrajectoryWriter, Walls, copy_frames, read_checkpoint
 from hsgran.scene import Scene, load_scene, override_note, parse_scene
 
 #: Wall time between two checkpoints of a run that writes a file [s], unless told otherwise: a

@@ -526,7 +526,7 @@ def test_no_walls_differs_from_walls_not_stored(tmp_path):
 def test_bad_walls_and_pair_table_are_refused(tmp_path):
     walls = floor_and_ramp()
     walls.material[1] = 2  # only two material names
-    with pytest.raises(ValueError, match="walls.material"):
+    with pytest.raises(ValueError, match=r"walls\.material"):
         TrajectoryWriter(tmp_path / "a.h5", **writer_args(), walls=walls)
     with pytest.raises(ValueError, match="pair_table"):
         TrajectoryWriter(tmp_path / "b.h5", **writer_args(), pair_table=np.zeros((3, 3, 14)))
