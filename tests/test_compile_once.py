@@ -42,5 +42,12 @@ def test_every_scene_uses_the_same_compiled_loop():
 
 
 def large_layout(signature) -> bool:
-    """A signature of the layout for large systems: strided ("A") arrays of record fields."""
-    return "'A'" in str(signature)
+    """A signature of the layout for large systems: strided ("A") arrays of record fields,
+    anywhere in the argument types (the state groups are named tuples of arrays)."""
+    stack = list(signature)
+    while stack:
+        t = stack.pop()
+        if isinstance(t, numba.types.Array) and t.layout == "A":
+            return True
+        stack.extend(getattr(t, "types", ()))
+    return False
