@@ -9,7 +9,7 @@ Public API (more in the submodules):
 * :func:`hsgran.impact.sphere_wall_impact`, :func:`hsgran.impact.sphere_sphere_impact` —
   one collision, with a full record of what happened.
 
-Where MODEL.md marks a formula as our own reconstruction ([OURS]) the docstring says so; the
+Where docs/model.md marks a formula as our own reconstruction ([OURS]) the docstring says so; the
 main ones are the elastic–plastic pressure law (§3.3), the fully plastic stage (§3.4), the
 line-force estimate from a work of adhesion (§3.8) and the rolling couple (§5).
 """

@@ -174,8 +174,8 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
     # The neighbouring lists and, on periodic axes, which image of their spheres can touch
     # sphere i: the one in the cell next to i's (the nearest image at prediction time is not
     # always the one that touches later). First gather the heads of the lists, then walk them:
-    # the head loads do not depend on each other, so their cache misses overlap (measured 1.2x
-    # faster predictions at N = 1e6, where the grid does not fit the cache; same at N = 1e3).
+    # the head loads do not depend on each other, so their cache misses overlap where the grid
+    # does not fit the cache (docs/performance.md).
     # i's share of the rounding scales of an approach (motion.approach_noise)
     vs_i = abs(ui) + abs(vi) + abs(wi)
     xs_i = abs(xi) + abs(yi) + abs(zi)

@@ -51,16 +51,17 @@ from hsgran.validate import add_validate_parser, cmd_validate
 
 PROG = "hsgran"
 
-#: What MODEL.md marks as our own reconstruction; said by ``impact --help`` and under the table.
+#: What docs/model.md marks as our own reconstruction; said by ``impact --help`` and under
+#: the table.
 RECONSTRUCTION_NOTE = (
-    "Parts of this model are our reconstruction, marked [OURS] in MODEL.md: the elastic-plastic "
-    "and fully plastic stages (§3.3-3.4), the f0 estimate of the adhesion line force from a work "
-    "of adhesion (§3.8) and the rolling couple inside a collision (§5.2)."
+    "Parts of this model are our reconstruction, marked [OURS] in docs/model.md: the "
+    "elastic-plastic and fully plastic stages (§3.3-3.4), the f0 estimate of the adhesion line "
+    "force from a work of adhesion (§3.8) and the rolling couple inside a collision (§5.2)."
 )
 
 #: The same, as the one last line of the ``hsgran impact`` table.
-RECONSTRUCTION_LINE = ("note: our reconstruction ([OURS] in MODEL.md): §3.3-3.4 plastic stages, "
-                       "§3.8 f0 estimate, §5.2 rolling couple")
+RECONSTRUCTION_LINE = ("note: our reconstruction ([OURS] in docs/model.md): §3.3-3.4 plastic "
+                       "stages, §3.8 f0 estimate, §5.2 rolling couple")
 
 #: Frame of every vector that ``hsgran impact`` reads or prints.
 IMPACT_FRAME = (
@@ -177,7 +178,7 @@ def _paragraphs(*paragraphs: str, width: int = 79) -> str:
 _IMPACT_DESCRIPTION = _paragraphs(
     "One collision: a sphere hitting a wall (--wall MAT), or a sphere hitting another sphere "
     "at rest (--other MAT --other-radius R2), computed with the collision model of Yu, "
-    "Elghannay & Tafti (2017) as specified in MODEL.md. Prints a table, or one JSON object "
+    "Elghannay & Tafti (2017) as specified in docs/model.md. Prints a table, or one JSON object "
     "with --json.",
     f"Frame: {IMPACT_FRAME}. The resting sphere lies below the moving one, so --angle has the "
     "same meaning for a wall and for a sphere.",
@@ -411,7 +412,7 @@ def _impact_derived(result: ImpactResult, velocity, omega, radius: float,
 
 
 def _governing(sphere: Material, body2: Material, wall: bool) -> str:
-    """Which body's yield stress governs the pair (the smaller one, MODEL.md §2)."""
+    """Which body's yield stress governs the pair (the smaller one, MODEL §2)."""
     if sphere.yield_stress == body2.yield_stress:
         return "both"
     if sphere.yield_stress < body2.yield_stress:

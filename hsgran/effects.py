@@ -9,12 +9,12 @@ Effects and what they switch on:
 ===================== ==========================================================================
 ``gravity``           parabolic free flight (engine)
 ``rotation``          angular velocities exist at all
-``friction``          sliding/rolling tangential impulse, MODEL.md §4 (needs ``rotation``)
-``rolling_resistance`` rolling couple μ_r R* F_n, MODEL.md §5 (needs ``friction``)
-``plasticity``        staged elastic / elastic–plastic / fully plastic normal model, MODEL.md §3;
+``friction``          sliding/rolling tangential impulse, MODEL §4 (needs ``rotation``)
+``rolling_resistance`` rolling couple μ_r R* F_n, MODEL §5 (needs ``friction``)
+``plasticity``        staged elastic / elastic–plastic / fully plastic normal model, MODEL §3;
                       without it the normal law is elastic Hertz (e_n = 1) or the pair's fixed
                       restitution
-``adhesion``          Dunn's line force during recovery, MODEL.md §3.8
+``adhesion``          Dunn's line force during recovery, MODEL §3.8
 ===================== ==========================================================================
 """
 

@@ -50,7 +50,8 @@ from hsgran.onplane import CONVENTION_A, CONVENTION_B
 
 #: Bytes of frame buffer the engine may hold; frames are handed to observers when it is full.
 FRAME_BUFFER_BYTES = 32 * 2**20
-#: Most frames buffered at once (1000-frame blocks append at ~1e6 frames/s in h5py, DESIGN §4).
+#: Most frames buffered at once (1000-frame blocks append at ~1e6 frames/s in h5py,
+#: docs/architecture.md §4).
 FRAME_BUFFER_MAX = 1000
 #: Event-log entries buffered before they are handed to observers.
 LOG_BUFFER = 1 << 16

@@ -188,7 +188,7 @@ def sphere_wall_impact(sphere: Material, wall: Material, radius: float, velocity
         InputError: non-physical or missing input.
 
     References:
-        MODEL.md §2 (wall as body 2 with infinite mass), §6.
+        MODEL §2 (wall as body 2 with infinite mass), §6.
     """
     effects = Effects.all() if effects is None else effects
     contact = Contact() if contact is None else contact

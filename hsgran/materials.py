@@ -2,10 +2,10 @@
 
 A :class:`Material` holds bulk properties; a :class:`Contact` holds what belongs to a pair of
 surfaces (friction, adhesion, an optional prescribed restitution, the model constants of
-MODEL.md §8). :func:`pair_row` turns a pair into one flat ``float64`` row that the compiled
+MODEL §8). :func:`pair_row` turns a pair into one flat ``float64`` row that the compiled
 collision kernels read through the ``P_*`` indices below.
 
-The critical values of MODEL.md §3.2–3.4 (δ_y, F_y, W_y, δ_p, W_p) scale with powers of the
+The critical values of MODEL §3.2–3.4 (δ_y, F_y, W_y, δ_p, W_p) scale with powers of the
 effective radius R* alone (δ ∝ R*, F ∝ R*², W ∝ R*³), so the row stores them per unit R*: they
 are computed once per pair of materials, and a collision of spheres of any size costs one
 multiplication per value. :func:`critical_values` gives them in SI units for given sizes.
@@ -24,19 +24,19 @@ import numpy as np
 
 from hsgran.errors import InputError, check_number, did_you_mean
 
-# ---- model constants (MODEL.md §8) -------------------------------------------------------
+# ---- model constants (MODEL §8) -------------------------------------------------------
 
-#: First-yield factor c = p0/σ_y for ν ≈ 0.3 (von Mises; Johnson 1985) [-]. MODEL.md §3.2, [LIT].
+#: First-yield factor c = p0/σ_y for ν ≈ 0.3 (von Mises; Johnson 1985) [-]. MODEL §3.2, [LIT].
 YIELD_FACTOR_DEFAULT = 1.6
-#: Hardness factor κ = p_p/σ_y (Tabor-type hardness) [-]. MODEL.md §3.3, [LIT/OURS].
+#: Hardness factor κ = p_p/σ_y (Tabor-type hardness) [-]. MODEL §3.3, [LIT/OURS].
 HARDNESS_FACTOR_DEFAULT = 2.8
-#: ρ_p = δ_p/δ_y, onset of fully plastic contact (Kogut & Etsion 2002) [-]. MODEL.md §3.3.
+#: ρ_p = δ_p/δ_y, onset of fully plastic contact (Kogut & Etsion 2002) [-]. MODEL §3.3.
 PLASTIC_RATIO_DEFAULT = 110.0
 #: Coefficient of the JKR-matched line-force estimate f0 = C (E* R* Δγ²)^(1/3) [-], with
-#: C = (3/4)(8/(9π))^(1/3). MODEL.md §3.8, [OURS, low confidence].
+#: C = (3/4)(8/(9π))^(1/3). MODEL §3.8, [OURS, low confidence].
 JKR_LINE_FORCE_COEF = 0.75 * (8.0 / (9.0 * math.pi)) ** (1.0 / 3.0)
 
-#: Moment of inertia factor of a solid sphere, I = k m R² (MODEL.md §8, [LIT]).
+#: Moment of inertia factor of a solid sphere, I = k m R² (MODEL §8, [LIT]).
 SOLID_SPHERE_INERTIA = 0.4
 
 
@@ -94,19 +94,19 @@ class Material:
         return math.isinf(self.youngs_modulus)
 
     def compliance(self) -> float:
-        """(1 − ν²)/E [1/Pa], this body's share of 1/E* (0 for a rigid body). MODEL.md §2."""
+        """(1 − ν²)/E [1/Pa], this body's share of 1/E* (0 for a rigid body). MODEL §2."""
         return 0.0 if self.rigid else (1.0 - self.poisson_ratio**2) / self.youngs_modulus
 
 
 @dataclass(frozen=True, slots=True)
 class Contact:
-    """Properties of a pair of surfaces (MODEL.md §2–§5, §8).
+    """Properties of a pair of surfaces (MODEL §2–§5, §8).
 
     Attributes:
         sliding_friction: Coulomb coefficient μ_s [-]; ``None`` = not given.
         rolling_friction: Dimensionless rolling friction μ_r [-] (torque μ_r R* F_n).
         restitution: Prescribed normal restitution e_n in [0, 1] that bypasses the normal
-            model (MODEL.md §3.9), or ``None``.
+            model (MODEL §3.9), or ``None``.
         adhesion_line_force: Dunn's line force f0 [N/m], or ``None``.
         work_of_adhesion: Dupré work of adhesion Δγ [J/m²]; ``None`` = 2 (γ1 γ2)^(1/2).
         yield_factor: c = p0/σ_y at first yield [-], or ``"jackson-green"`` for
@@ -135,7 +135,7 @@ BUILTIN_MATERIALS: dict[str, Material] = {
     m.name: m
     for m in (
         Material("steel", 7800.0, 200e9, 0.30, 1.0e9, 0.0,
-                 _src("MODEL.md §7.1 regression sphere (hardened steel; E, ν, ρ handbook)")),
+                 _src("MODEL §7.1 regression sphere (hardened steel; E, ν, ρ handbook)")),
         Material("glass", 2500.0, 70e9, 0.25, 3.0e9, 0.0,
                  _src("soda-lime glass anvil of Kharaz et al. 2001 (E, ν); ρ handbook; "
                       "σ_y = 3 GPa as in the project's example scene (brittle: nominal)")),
@@ -152,12 +152,12 @@ BUILTIN_MATERIALS: dict[str, Material] = {
                  _src("Chung & Ooi 2011 test 1 (E, ν, ρ)")),
         Material("ammonium_fluorescein", 1350.0, 1.2e9, 0.30, 35.3e6 / 1.6, 0.1,
                  _src("Wall et al. 1990 microspheres as modelled by Pasha et al. 2014 "
-                      "(ρ, E, ν; σ_y = p_y/1.6 with p_y = 35.3 MPa, MODEL.md §7.1); "
+                      "(ρ, E, ν; σ_y = p_y/1.6 with p_y = 35.3 MPa, MODEL §7.1); "
                       "γ = 0.1 J/m² so that 2(γ1γ2)^(1/2) = Γ = 0.2 J/m² against silicon")),
         Material("silicon", 2329.0, 182e9, 0.30, math.inf, 0.1,
                  _src("Pasha et al. 2014 (E, ν); ρ handbook; γ as for ammonium_fluorescein")),
         Material("rigid", math.inf, math.inf, 0.0, math.inf, 0.0,
-                 _src("ideal rigid wall: drops out of E* (MODEL.md §2)")),
+                 _src("ideal rigid wall: drops out of E* (MODEL §2)")),
     )
 }
 
@@ -243,7 +243,7 @@ def check_contact(c: Contact, key: str) -> Contact:
     if c.hardness_factor <= 2.0 * yf / 3.0:
         raise InputError(
             f"hardness_factor {c.hardness_factor} must exceed (2/3) yield_factor = {2 * yf / 3:.3g}"
-            " (the mean pressure may only rise after first yield, MODEL.md §3.3)",
+            " (the mean pressure may only rise after first yield, MODEL §3.3)",
             f"{key}.hardness_factor",
         )
     return c
@@ -252,7 +252,7 @@ def check_contact(c: Contact, key: str) -> Contact:
 # ---- the pair row ------------------------------------------------------------------------
 
 def yield_factor_of(contact: Contact, yielding: Material) -> float:
-    """First-yield factor c for a pair (MODEL.md §3.2).
+    """First-yield factor c for a pair (MODEL §3.2).
 
     Args:
         contact: Pair properties (``yield_factor`` a number or ``"jackson-green"``).
@@ -267,7 +267,7 @@ def yield_factor_of(contact: Contact, yielding: Material) -> float:
 
 
 def effective_modulus(m1: Material, m2: Material) -> float:
-    """E* with 1/E* = (1 − ν1²)/E1 + (1 − ν2²)/E2 [Pa] (MODEL.md §2).
+    """E* with 1/E* = (1 − ν1²)/E1 + (1 − ν2²)/E2 [Pa] (MODEL §2).
 
     Raises:
         InputError: when both bodies are rigid (a contact needs one compliant body).
@@ -279,7 +279,7 @@ def effective_modulus(m1: Material, m2: Material) -> float:
 
 
 def work_of_adhesion(m1: Material, m2: Material, contact: Contact) -> float:
-    """Δγ [J/m²]: the pair's value if given, else 2 (γ1 γ2)^(1/2) (MODEL.md §3.8, [OURS])."""
+    """Δγ [J/m²]: the pair's value if given, else 2 (γ1 γ2)^(1/2) (MODEL §3.8, [OURS])."""
     if contact.work_of_adhesion is not None:
         return float(contact.work_of_adhesion)
     return 2.0 * math.sqrt(m1.surface_energy * m2.surface_energy)
@@ -296,10 +296,10 @@ def pair_row(m1: Material, m2: Material, contact: Contact) -> np.ndarray:
         ``float64`` array of length :data:`PAIR_ROW_SIZE`, indexed by the ``P_*`` constants.
 
     References:
-        MODEL.md §2 (E*, σ_y = min), §3.2 (δ_y, F_y, W_y), §3.3–3.4 (λ, W_p, p_p), §3.8 (f0).
+        MODEL §2 (E*, σ_y = min), §3.2 (δ_y, F_y, W_y), §3.3–3.4 (λ, W_p, p_p), §3.8 (f0).
     """
     e_star = effective_modulus(m1, m2)
-    # The body that reaches c σ_y first yields first (MODEL.md §2 takes the lower σ_y); on a tie
+    # The body that reaches c σ_y first yields first (MODEL §2 takes the lower σ_y); on a tie
     # in σ_y the lower c decides, so the result does not depend on which body is called 1.
     yielding = min((m1, m2), key=lambda m: (m.yield_stress, yield_factor_of(contact, m)))
     sigma = yielding.yield_stress
@@ -343,7 +343,7 @@ def pair_row(m1: Material, m2: Material, contact: Contact) -> np.ndarray:
 
 @dataclass(frozen=True, slots=True)
 class CriticalValues:
-    """Critical values of a pair for given sizes (MODEL.md §3.2–3.4), SI units."""
+    """Critical values of a pair for given sizes (MODEL §3.2–3.4), SI units."""
 
     delta_y: float  #: deformation at first yield [m]
     force_y: float  #: force at first yield [N]
@@ -359,7 +359,7 @@ def critical_values(row: np.ndarray, r_eff: float, m_eff: float) -> CriticalValu
     """Critical values of a pair row for effective radius ``r_eff`` [m] and mass ``m_eff`` [kg].
 
     References:
-        MODEL.md §3.2 (δ_y, F_y, W_y, V_y), §3.4 (δ_p, F_p, W_p, V_p).
+        MODEL §3.2 (δ_y, F_y, W_y, V_y), §3.4 (δ_p, F_p, W_p, V_p).
     """
     dy = row[P_DY_R] * r_eff
     wy = row[P_WY_R3] * r_eff**3

@@ -270,7 +270,7 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
     between critical points (the zeros of f', themselves bracketed by the zeros of f'', a
     quadratic) and found by safeguarded Newton–bisection, which stays robust at grazing
     contacts and double roots where closed-form quartic formulas lose all accuracy
-    (DESIGN.md §3).
+    (docs/architecture.md §3).
 
     Args:
         rx, ry, rz: Separation x_i − x_j [m].

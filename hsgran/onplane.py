@@ -1,6 +1,6 @@
 """A sphere in enduring contact with a plane under gravity: sliding, rolling, rest (layer 2).
 
-MODEL.md §5.3 gives the closed form on a horizontal plate: sliding under Coulomb friction until
+MODEL §5.3 gives the closed form on a horizontal plate: sliding under Coulomb friction until
 the slip vanishes (the instant C), then rolling against rolling friction until rest (C′). Here
 the same rigid-body equations are written for a plane of any tilt, in 3-D vector form, as
 *segments* of constant linear acceleration ``a`` and angular acceleration ``α``: within a segment
@@ -93,7 +93,7 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir):
         (state, ax, ay, az, alx, aly, alz, duration [s], end code).
 
     References:
-        MODEL.md §5.1, §5.3.
+        MODEL §5.1, §5.3.
     """
     nx, ny, nz = n[0], n[1], n[2]
     gn = -(g[0] * nx + g[1] * ny + g[2] * nz)

@@ -15,9 +15,10 @@ camera, walls) comes from :mod:`hsgran.animation`; this module draws it and writ
 * Output is written to a temporary file beside the target and renamed at the end: an
   interrupted or failed render never leaves a half-written movie under the target's name.
 
-VTK segfaults instead of raising when the system GL libraries are missing (DESIGN.md §6), so
-:func:`missing_system_libraries` checks for them before anything creates a render window, and
-``VTK_DEFAULT_OPENGL_WINDOW`` is set to the EGL window before pyvista is imported.
+VTK segfaults instead of raising when the system GL libraries are missing
+(docs/architecture.md §6), so :func:`missing_system_libraries` checks for them before anything
+creates a render window, and ``VTK_DEFAULT_OPENGL_WINDOW`` is set to the EGL window before
+pyvista is imported.
 """
 
 from __future__ import annotations
@@ -63,7 +64,7 @@ from hsgran.scene import Plane, parse_scene
 #: Environment variable that picks VTK's render window class, and the offscreen class we use.
 WINDOW_VARIABLE = "VTK_DEFAULT_OPENGL_WINDOW"
 EGL_WINDOW = "vtkEGLRenderWindow"
-#: Debian packages that provide libEGL and Mesa's software rasteriser (DESIGN.md §6).
+#: Debian packages that provide libEGL and Mesa's software rasteriser (docs/architecture.md §6).
 GL_PACKAGES = "libegl1 libgl1-mesa-dri"
 #: Set to 1 to skip the library check (a GL stack our search does not know about).
 SKIP_CHECK_VARIABLE = "HSGRAN_SKIP_GL_CHECK"

@@ -6,7 +6,7 @@ offending value (``particles[3].radius``, ``walls[0].normal``, ``materials.steel
 so the command line can print it without a traceback. Everything downstream (assembly of the
 physics, the engine, the writers) may assume the scene is consistent.
 
-The format (every length in m, time in s, speed in m/s; DESIGN.md §4)::
+The format (every length in m, time in s, speed in m/s; docs/architecture.md §4)::
 
     [scene]
     name = "steel ball dropped on glass"   # optional; default: the file name
@@ -114,7 +114,7 @@ MEMORY_SHARE = 0.8
 
 #: Largest speed a scene may give a sphere, or a sphere's surface by its spin [m/s]. Beyond the
 #: sound speed of every solid (~6 km/s in steel) impacts are hypervelocity: the quasi-static
-#: contact law of MODEL.md §3 stopped holding long before, and past this the numbers are typos.
+#: contact law of MODEL §3 stopped holding long before, and past this the numbers are typos.
 MAX_SPEED = 1e4
 #: Largest gravitational acceleration [m/s²]: ~10⁶ g, the top of ultracentrifuges.
 MAX_GRAVITY = 1e7

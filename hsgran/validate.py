@@ -25,7 +25,7 @@ DESCRIPTION = (
     "Run hsgran's validation cases (the paper's normal, adhesive, oblique, spin, plate, "
     "incline and particle-particle cases and the Chung & Ooi benchmark tests 1-7) through the "
     "event-driven engine, compare each with its reference (closed forms, digitised benchmark "
-    "curves, MODEL.md §7.1 anchors), and write one figure per case and report.md into the "
+    "curves, MODEL §7.1 anchors), and write one figure per case and report.md into the "
     "output directory. Exit code 1 when a case fails its tolerance.")
 
 

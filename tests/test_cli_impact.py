@@ -48,7 +48,7 @@ def run_json(capsys, *argv) -> dict:
 # ---- JSON output ---------------------------------------------------------------------------
 
 def test_json_steel_head_on_plasticity_reproduces_regression_anchor(capsys):
-    # MODEL.md §7.1: steel sphere R = 5 mm on steel at 1 m/s.
+    # MODEL §7.1: steel sphere R = 5 mm on steel at 1 m/s.
     doc = run_json(capsys, *STEEL_ON_STEEL, "--speed", "1", "--angle", "0",
                    "--effects", "plasticity")
     for field in RESULT_FIELDS:
@@ -118,7 +118,7 @@ def test_json_sphere_sphere_conserves_linear_momentum(capsys):
 
 @pytest.mark.parametrize("spin", [150.0, -200.0])
 def test_spin_acts_through_the_effective_angle(capsys, spin):
-    # MODEL.md §4.3: the contact-point outcome depends only on u0 = v_t0 − R ω0, i.e. on
+    # MODEL §4.3: the contact-point outcome depends only on u0 = v_t0 − R ω0, i.e. on
     # tan θ_eff = u0/v_n0. A spinning sphere and a non-spinning one at θ_eff with the same
     # normal speed get the same tangential impulse, slip after and spin change.
     radius, speed, angle = 0.005, 2.0, 45.0
@@ -158,7 +158,7 @@ def test_gravity_is_accepted_and_ignored(capsys):
 
 
 def test_yield_stress_override_scales_the_yield_speed(capsys):
-    # MODEL.md §3.2: V_y ∝ σ_y^(5/2) at fixed E*, R*, m*. The override applies to the sphere;
+    # MODEL §3.2: V_y ∝ σ_y^(5/2) at fixed E*, R*, m*. The override applies to the sphere;
     # on a rigid wall the sphere's yield stress governs the pair.
     args = ["impact", "--sphere", "steel", "--wall", "rigid", "--radius", "0.005", "--speed", "1",
             "--angle", "0", "--effects", "plasticity"]
@@ -172,7 +172,7 @@ def test_yield_stress_override_scales_the_yield_speed(capsys):
 
 
 def test_yield_stress_override_leaves_the_wall_alone(capsys):
-    # The pair yields at the smaller yield stress (MODEL.md §2): a harder sphere on a 1 GPa
+    # The pair yields at the smaller yield stress (MODEL §2): a harder sphere on a 1 GPa
     # steel wall still yields at 1 GPa, and the table says which body governs.
     args = [*STEEL_ON_STEEL, "--speed", "1", "--angle", "0", "--effects", "plasticity"]
     base = run_json(capsys, *args)

@@ -1,7 +1,7 @@
 """Every citation of the model specification in the code resolves to a heading of docs/model.md.
 
-The code cites the specification as ``MODEL §3.8`` (older spelling ``MODEL.md §3.8``), also as
-lists and ranges (``MODEL.md §5.1, §5.3``, ``MODEL.md §3.2–3.4``, ``MODEL.md §3–§5``); a citation
+The code cites the specification as ``MODEL §3.8`` (older spelling ``MODEL §3.8``), also as
+lists and ranges (``MODEL §5.1, §5.3``, ``MODEL §3.2–3.4``, ``MODEL §3–§5``); a citation
 may break across a docstring or comment line. docs/model.md carries the numbers in its headings
 (``### §3.8 Adhesion during recovery ...``).
 """
@@ -56,8 +56,8 @@ def headings():
 
 
 def test_citation_pattern_reads_the_forms_in_use():
-    text = ("MODEL.md §3.2–3.4 and MODEL §5.3: x; (MODEL.md\n    §5.3) MODEL.md §5.1, §5.3. "
-            "MODEL.md §3–§5, MODEL.md): §3.3-3.4 plastic; MODEL.md §2, 3 spheres; MODEL.md §3.10")
+    text = ("MODEL §3.2–3.4 and MODEL §5.3: x; (MODEL.md\n    §5.3) MODEL §5.1, §5.3. "
+            "MODEL §3–§5, MODEL.md): §3.3-3.4 plastic; MODEL §2, 3 spheres; MODEL §3.10")
     got = []
     for m in CITATION.finditer(text):
         got.append(m.group(1))
@@ -86,5 +86,5 @@ def test_docs_model_says_what_the_citations_mean():
     text = MODEL_PAGE.read_text(encoding="utf-8")
     intro = text.split("\n## ", 1)[0]
     assert "`MODEL §x.y`" in intro
-    assert "`MODEL.md §x.y`" in intro
+    assert "`MODEL §x.y`" in intro
     assert "(enduring-contact.md)" in text

@@ -1,5 +1,5 @@
 """Enduring contact on a plane: sliding, rolling, rest, inclines, and bouncing that ends on the
-plate (issue: sliding, rolling and resting; MODEL.md §5.3)."""
+plate (issue: sliding, rolling and resting; MODEL §5.3)."""
 
 import math
 
@@ -94,7 +94,7 @@ def run_plate(scene):
 
 
 def closed_form(v0, omega0, r, mu_s, mu_r, g, conv):
-    """MODEL.md §5.3, phases 1 and 2, for a launch with u0 = v0 − R Ω0 > 0."""
+    """MODEL §5.3, phases 1 and 2, for a launch with u0 = v0 − R Ω0 > 0."""
     chi = 1.0 if conv == "A" else 0.0
     u0 = v0 - r * omega0
     assert u0 > 0

@@ -1,4 +1,4 @@
-"""Imports flow one way: a module never imports from a higher layer (DESIGN.md §1)."""
+"""Imports flow one way: a module never imports from a higher layer (docs/architecture.md §1)."""
 
 import ast
 import re

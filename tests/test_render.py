@@ -2,7 +2,8 @@
 bad input.
 
 Every picture is rendered by the real command in a subprocess (VTK segfaults instead of raising
-when the system GL libraries are missing, DESIGN.md §6, and a crash must not take pytest down);
+when the system GL libraries are missing, docs/architecture.md §6, and a crash must not take
+pytest down);
 bad input is checked in-process through :func:`hsgran.cli.main`, where it is refused before
 anything imports pyvista. The trajectories are written with TrajectoryWriter directly (tiny,
 known motions), except one run through the engine.

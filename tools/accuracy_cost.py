@@ -69,7 +69,7 @@ GLASS = BUILTIN_MATERIALS["glass"]
 RIGID = BUILTIN_MATERIALS["rigid"]
 
 # ---- section 1: one impact ----------------------------------------------------------------
-#: The MODEL.md §7.1 regression sphere (steel, R = 5 mm) on a steel wall, with friction.
+#: The MODEL §7.1 regression sphere (steel, R = 5 mm) on a steel wall, with friction.
 IMPACT_RADIUS = 5e-3
 IMPACT_MU = 0.3
 IMPACT_SPEEDS = (0.1, 1.0, 10.0)  #: [m/s]: elastic, elastic–plastic, deep elastic–plastic
@@ -84,7 +84,7 @@ CO4_RADIUS, CO4_SPEED, CO4_MU, CO4_E_FIXED = 2.5e-3, 3.9, 0.092, 0.98
 #: Rolling friction and work of adhesion switched on for the "+ rolling" and "+ adhesion" levels
 #: (illustrative values: the benchmark has neither).
 LEVEL_MU_R = 0.01
-LEVEL_WORK_OF_ADHESION = 0.2  #: [J/m²], the MODEL.md §7.1 adhesive pair's value
+LEVEL_WORK_OF_ADHESION = 0.2  #: [J/m²], the MODEL §7.1 adhesive pair's value
 #: Steps per contact of the time-resolved levels (finer than DEM custom: model error only).
 LEVEL_STEPS = 200
 
@@ -836,21 +836,21 @@ def write_report(out: Path, res: dict, command: str, mach: dict, elapsed: float)
          conclusion, "",
          "## How the reference works", "",
          "`hsgran.dem` integrates the force law that the impulse model integrates in energy "
-         "(MODEL.md §3): Hertz loading (§3.1), the elastic–plastic log-pressure law (§3.3) and "
+         "(MODEL §3): Hertz loading (§3.1), the elastic–plastic log-pressure law (§3.3) and "
          "fully plastic stage (§3.4) — both **our reconstructions [OURS]**, as is a² = R* δ in "
          "all stages —, elastic unloading with the flattened radius R′ (§3.7), Dunn's adhesion "
          "line force 2π a f0 during recovery (§3.8; the f0 estimate from Δγ is [OURS]) and "
          "Coulomb friction (§4) with rigid sticking, by velocity Verlet with a fixed step "
          "dt = t_c/n, t_c the elastic Hertz duration at the impact speed. The constants come "
          "from the same pair row (`hsgran.materials.pair_row`). Two options are DEM practice, "
-         "not MODEL.md: a Mindlin tangential spring (k_t = 8 G* a, Coulomb cap) and a "
+         "not docs/model.md: a Mindlin tangential spring (k_t = 8 G* a, Coulomb cap) and a "
          "restitution dashpot (Tsuji form, coefficient calibrated so that one impact gives the "
          "prescribed e_n exactly). `hsgran.dem.many` is a fixed-step many-sphere integrator "
          "(Verlet neighbour list from a cell grid, Hertz + dashpot, history-free Coulomb "
          "friction) — the stand-in for a DEM code.", ""]
     # section 1
     L += ["## 1. One impact: impulse model against the time-resolved contact", "",
-          f"Steel sphere R = {IMPACT_RADIUS * 1e3:g} mm on a steel wall (MODEL.md §7.1 "
+          f"Steel sphere R = {IMPACT_RADIUS * 1e3:g} mm on a steel wall (MODEL §7.1 "
           f"regression sphere), μ = {IMPACT_MU}, staged model with friction; speeds "
           f"{', '.join(f'{v:g}' for v in imp['speeds'])} m/s × angles "
           f"{', '.join(f'{a:g}' for a in imp['angles'])}°. Errors are the largest over these "
@@ -865,7 +865,7 @@ def write_report(out: Path, res: dict, command: str, mach: dict, elapsed: float)
           f"With a Mindlin tangential spring instead of rigid sticking (t_c/{imp['fine']}), the "
           f"outcome differs from the impulse model by abs(Δe_n) = {_fmt(imp['mindlin'][0])}, "
           f"{_fmt(imp['mindlin'][1])}° in rebound angle and {_fmt(imp['mindlin'][2])} in "
-          f"relative spin: that is a model difference (tangential compliance, MODEL.md §4.4), "
+          f"relative spin: that is a model difference (tangential compliance, MODEL §4.4), "
           f"not a time-step error.", "",
           f"![one impact]({imp['figure']})", ""]
     lam = res.get("lammps")

@@ -1,4 +1,4 @@
-"""One collision, in the fixed order of MODEL.md §6.
+"""One collision, in the fixed order of MODEL §6.
 
 :func:`resolve` is the compiled kernel: it takes the two bodies' velocities and spins (updated
 in place), the contact normal, inverse masses and inertias, lever arms, the pair row, a record
@@ -8,7 +8,7 @@ event loop (hsgran._loop) instead passes the flags as run-time switches, so that
 loop serves every scene: a disabled effect then costs one predictable branch and its code
 never runs. ``tools/bench_contact.py`` measures both.
 
-Order (MODEL.md §6): relative contact velocity → normal model (fixed restitution, or elastic
+Order (MODEL §6): relative contact velocity → normal model (fixed restitution, or elastic
 Hertz, or the staged model; then adhesion in recovery) → rolling couple → tangential impulse
 with the updated spins → apply J = J_n n − J_t t̂ → record.
 
@@ -40,7 +40,7 @@ from hsgran.effects import Effects
 from hsgran.materials import P_E_FIXED, P_E_STAR, P_MU_R, P_MU_S, P_WP_R3, P_WY_R3
 
 #: A slip (or rolling) speed below SLIP_EPS_REL × max(v0, 1 m/s) has no defined direction and
-#: gets no impulse: that is round-off of velocities of order v0 (MODEL.md §2, ε_t).
+#: gets no impulse: that is round-off of velocities of order v0 (MODEL §2, ε_t).
 SLIP_EPS_REL = 1e-12
 
 # ---- the record of one collision (indices into a float64 array of size REC_SIZE) ---------
@@ -68,7 +68,7 @@ REC_T_CONTACT = 19  #: contact duration (elastic stage only, Hertz) [s]
 REC_SIZE = 20
 
 
-# long: one collision in the fixed order of MODEL.md §6, read top to bottom against the model;
+# long: one collision in the fixed order of MODEL §6, read top to bottom against the model;
 # its steps share the contact velocity, impulses and losses as scalar locals, which helpers of
 # this kernel (inlined into the event loop) would pass back and forth as tuples.
 @njit(inline="always")
@@ -93,7 +93,7 @@ def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, 
         True if the bodies were approaching (a collision was applied), else False.
 
     References:
-        MODEL.md §6 (order), §2 (kinematics), §3 (normal), §5.2 (rolling), §4 (tangential).
+        MODEL §6 (order), §2 (kinematics), §3 (normal), §5.2 (rolling), §4 (tangential).
     """
     # 1. relative velocity of the contact points, ΔV = (V1 − V2) − (R1 ω1 + R2 ω2) × n (§2)
     dvx = v1[0] - v2[0]
@@ -238,7 +238,7 @@ def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, 
     rec[REC_J_T] = j_t
     rec[REC_REGIME] = regime
     rec[REC_CAPTURED] = 1.0 if captured else 0.0
-    rec[REC_ENERGY_LOST] = (1.0 - e_n * e_n) * t0 + loss_t + loss_roll  # MODEL.md §7 item 1
+    rec[REC_ENERGY_LOST] = (1.0 - e_n * e_n) * t0 + loss_t + loss_roll  # MODEL §7 item 1
     rec[REC_V0] = v0
     rec[REC_H_ROLL] = h
     if diagnostics:

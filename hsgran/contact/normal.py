@@ -1,4 +1,4 @@
-"""Normal model: staged compression and elastic recovery (MODEL.md §3).
+"""Normal model: staged compression and elastic recovery (MODEL §3).
 
 The deformation history is integrated in energy (quasi-static): the maximum compression δ_max
 solves W(δ_max) = T0 = m* v0²/2 (§3.5), and the elastic energy returned in recovery follows from
@@ -7,7 +7,7 @@ constants. All functions are compiled, scalar in, scalars out.
 
 Provenance: §3.1, §3.2, §3.6 [LIT]; §3.3 elastic–plastic log pressure law and §3.4 fully plastic
 stage are **[OURS]** reconstructions (the paper's equations were not available; the literal
-Stronge area law gives e_n > 1, see MODEL.md §3.10); §3.7 recovery [YT]/[LIT].
+Stronge area law gives e_n > 1, see MODEL §3.10); §3.7 recovery [YT]/[LIT].
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ NEWTON_RTOL = 1e-13
 #: Newton iteration cap. From the start used below it needs 3–6 steps; 60 only guards
 #: against an infinite loop on non-finite input.
 NEWTON_MAX_ITER = 60
-#: Hertz contact-duration constant C in t_c = C (m*²/(R* E*² v0))^(1/5) (MODEL.md §3.1 rounds it
+#: Hertz contact-duration constant C in t_c = C (m*²/(R* E*² v0))^(1/5) (MODEL §3.1 rounds it
 #: to 2.868). Exactly, t_c = 2 (δ_max/v0) ∫₀¹ (1 − x^(5/2))^(−1/2) dx with the integral equal to
 #: (2/5) B(2/5, 1/2), and δ_max = (15/16)^(2/5) (m*² v0⁴/(R* E*²))^(1/5), so C = 2.868266...
 HERTZ_DURATION_COEF = (2.0 * 0.4 * math.gamma(0.4) * math.gamma(0.5) / math.gamma(0.9)
@@ -58,7 +58,7 @@ def hertz_max_compression(t0, e_star, r_eff):
         (δ_max [m], F_max [N], a_max [m]).
 
     References:
-        MODEL.md §3.1: W = (8/15) E* R*^(1/2) δ^(5/2), F = (4/3) E* R*^(1/2) δ^(3/2), a² = R* δ.
+        MODEL §3.1: W = (8/15) E* R*^(1/2) δ^(5/2), F = (4/3) E* R*^(1/2) δ^(3/2), a² = R* δ.
     """
     sr = math.sqrt(r_eff)
     d = (15.0 * t0 / (8.0 * e_star * sr)) ** 0.4
@@ -75,7 +75,7 @@ def elastic_plastic_work(u, a_coef):
         a_coef: (λ − 1)/ln ρ_p [-].
 
     References:
-        MODEL.md §3.3 [OURS]: w = (u² − 1)/2 + A [u² ln(u)/2 − u²/4 + 1/4]; dw/du = u (1 + A ln u).
+        MODEL §3.3 [OURS]: w = (u² − 1)/2 + A [u² ln(u)/2 − u²/4 + 1/4]; dw/du = u (1 + A ln u).
     """
     uu = u * u
     return 0.5 * (uu - 1.0) + a_coef * (0.5 * uu * math.log(u) - 0.25 * uu + 0.25)
@@ -83,7 +83,7 @@ def elastic_plastic_work(u, a_coef):
 
 @njit
 def solve_elastic_plastic(target, a_coef, rho_p):
-    """Solve w(u) = ``target`` for u in [1, ρ_p] (MODEL.md §3.5, middle case).
+    """Solve w(u) = ``target`` for u in [1, ρ_p] (MODEL §3.5, middle case).
 
     w is increasing and convex on u ≥ 1 (w'' = 1 + A + A ln u > 0), so Newton converges from
     any start in [1, ρ_p]; after the first step it approaches the root monotonically from above.
@@ -124,7 +124,7 @@ def staged_max_compression(t0, r_eff, row):
         (stage, δ_max [m], F_max [N], a_max [m]).
 
     References:
-        MODEL.md §3.5 (energy balance W(δ_max) = T0); laws of §3.1, §3.3, §3.4; a² = R* δ in all
+        MODEL §3.5 (energy balance W(δ_max) = T0); laws of §3.1, §3.3, §3.4; a² = R* δ in all
         stages ([OURS], Thornton–Ning convention).
     """
     r3 = r_eff * r_eff * r_eff
@@ -149,7 +149,7 @@ def staged_max_compression(t0, r_eff, row):
 
 @njit
 def elastic_recovery(f_max, a_max, e_star):
-    """Elastic unloading of a flattened contact (MODEL.md §3.7).
+    """Elastic unloading of a flattened contact (MODEL §3.7).
 
     Args:
         f_max: Force at maximum compression [N].
@@ -167,7 +167,7 @@ def elastic_recovery(f_max, a_max, e_star):
 
 @njit
 def stage_impulses(v0, m_eff, wy, wp):
-    """Normal impulse accumulated in each compression stage (MODEL.md §3.6).
+    """Normal impulse accumulated in each compression stage (MODEL §3.6).
 
     Args:
         v0: Normal impact speed [m/s].
@@ -192,5 +192,5 @@ def stage_impulses(v0, m_eff, wy, wp):
 
 @njit
 def hertz_contact_time(v0, m_eff, r_eff, e_star):
-    """Duration of an elastic Hertz impact [s] (MODEL.md §3.1)."""
+    """Duration of an elastic Hertz impact [s] (MODEL §3.1)."""
     return HERTZ_DURATION_COEF * (m_eff * m_eff / (r_eff * e_star * e_star * v0)) ** 0.2

@@ -1,4 +1,4 @@
-"""Rolling resistance inside a collision (MODEL.md §5.2).
+"""Rolling resistance inside a collision (MODEL §5.2).
 
 **[OURS]**, low confidence: an angular impulse H = min(μ_r R* J_n, H_cap) against the rolling
 part of the relative spin, capped so that it can at most stop the relative rolling (our reading

@@ -1,8 +1,8 @@
-"""Tangential model: sliding or rolling decided from the normal impulse (MODEL.md §4).
+"""Tangential model: sliding or rolling decided from the normal impulse (MODEL §4).
 
 Rigid-body tangential model [P]: the slip keeps its direction during the impact and only
 shrinks; Coulomb friction bounds the tangential impulse. Formulas [LIT] (Walton's model with
-zero tangential restitution, MODEL.md §4.4).
+zero tangential restitution, MODEL §4.4).
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ def tangential_impulse(slip, m_t, mu_s, j_n):
         (rolling), else μ_s J_n (sliding).
 
     References:
-        MODEL.md §4.2.
+        MODEL §4.2.
     """
     j_stick = m_t * slip
     j_lim = mu_s * j_n

@@ -4,7 +4,7 @@ The impulse model of :mod:`hsgran.contact` replaces each collision by its outcom
 integrates the *same* staged force law through the contact with a small fixed time step, the
 way a soft-sphere DEM code (LAMMPS granular, LIGGGHTS, MercuryDPM, Yade) advances every contact:
 
-* :mod:`.law` — the force of one contact at one instant: the loading curve of MODEL.md §3.1,
+* :mod:`.law` — the force of one contact at one instant: the loading curve of MODEL §3.1,
   §3.3, §3.4, the elastic unloading of §3.7, Dunn's adhesion line force of §3.8, a
   restitution dashpot (the DEM way to prescribe e_n), and the tangential force (Coulomb with
   rigid sticking, as the impulse model assumes, or a Mindlin spring with a Coulomb cap, as

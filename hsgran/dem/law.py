@@ -1,4 +1,4 @@
-"""The force of one contact at one instant: hsgran's staged law written as F(δ) (MODEL.md §3–§5).
+"""The force of one contact at one instant: hsgran's staged law written as F(δ) (MODEL §3–§5).
 
 The impulse model (:mod:`hsgran.contact`) integrates this law in energy and never needs the
 force at a given instant. A time-stepping integrator does, so the same laws are written here as
@@ -12,11 +12,11 @@ formulas of :func:`hsgran.contact.normal.elastic_recovery`:
   the residual deformation δ_res; reloading below δ_max follows the same elastic curve;
 * adhesion — §3.8: Dunn's line force 2π a f0 on the contact perimeter, recovery only
   ([P]/[YT]; f0 estimate [OURS]);
-* a restitution dashpot (not part of MODEL.md): how DEM codes prescribe e_n; used only when a
+* a restitution dashpot (not part of docs/model.md): how DEM codes prescribe e_n; used only when a
   pair gives a fixed restitution, which in the impulse model bypasses §3.1–3.8 (§3.9);
 * tangential — Coulomb friction with rigid sticking (the impulse model's assumption, §4: no
   tangential compliance), or a Mindlin no-slip spring k_t = 8 G* a capped by Coulomb (what DEM
-  codes use; not part of MODEL.md, which has no tangential compliance, §4.4);
+  codes use; not part of docs/model.md, which has no tangential compliance, §4.4);
 * rolling resistance — torque μ_r R* F_n against the rolling spin (§5.1, [OURS]).
 
 All functions are compiled scalar kernels (SI units throughout).
@@ -45,7 +45,7 @@ def loading_force(d, r_eff, row, plasticity):
         F [N].
 
     References:
-        MODEL.md §3.1 F = (4/3) E* R*^(1/2) δ^(3/2); §3.3 F = F_y u [1 + (λ − 1) ln(u)/L] with
+        MODEL §3.1 F = (4/3) E* R*^(1/2) δ^(3/2); §3.3 F = F_y u [1 + (λ − 1) ln(u)/L] with
         u = δ/δ_y ([OURS]); §3.4 F = π R* δ p_p ([OURS]).
     """
     if d <= 0.0:
@@ -75,7 +75,7 @@ def unloading_curve(d_max, r_eff, row, plasticity):
         An elastic contact unloads along its loading curve: (R*, 0).
 
     References:
-        MODEL.md §3.7: R′ = 4E* a_max³/(3F_max), δ_r = 3F_max/(4E* a_max), δ_res = δ_max − δ_r.
+        MODEL §3.7: R′ = 4E* a_max³/(3F_max), δ_r = 3F_max/(4E* a_max), δ_res = δ_max − δ_r.
     """
     if not plasticity or d_max <= row[P_DY_R] * r_eff:
         return r_eff, 0.0
@@ -86,7 +86,7 @@ def unloading_curve(d_max, r_eff, row, plasticity):
 
 @njit
 def unloading_force(d, r_prime, d_res, e_star):
-    """Force and contact radius on the unloading curve (MODEL.md §3.7).
+    """Force and contact radius on the unloading curve (MODEL §3.7).
 
     Args:
         d: Overlap δ [m].
@@ -107,13 +107,13 @@ def unloading_force(d, r_prime, d_res, e_star):
 @njit
 def adhesion_force(a, f0):
     """Dunn's adhesion force 2π a f0 [N] of a line force ``f0`` [N/m] on a perimeter of radius
-    ``a`` [m] (MODEL.md §3.8); it acts against separation during recovery only."""
+    ``a`` [m] (MODEL §3.8); it acts against separation during recovery only."""
     return 2.0 * math.pi * a * f0
 
 
 @njit
 def dashpot_force(approach_rate, d, r_eff, m_eff, e_star, coef):
-    """Normal viscous force of a restitution dashpot (DEM practice, not MODEL.md).
+    """Normal viscous force of a restitution dashpot (DEM practice, not docs/model.md).
 
     Args:
         approach_rate: dδ/dt [m/s], positive while compressing.
@@ -138,7 +138,7 @@ def coulomb_force(slip, m_t, mu, f_n, dt):
 
     The force that would stop the slip within the step, m_t* u/dt, is applied if it is within
     the Coulomb limit μ F_n; otherwise the force is μ F_n against the slip. As dt → 0 this is
-    the impulse model's rigid-body rule J_t = min(m_t* |u0|, μ J_n) (MODEL.md §4.2).
+    the impulse model's rigid-body rule J_t = min(m_t* |u0|, μ J_n) (MODEL §4.2).
 
     Args:
         slip: Contact-point slip velocity u along the tangent [m/s].
@@ -193,7 +193,7 @@ def rolling_torque(spin, inertia, mu_r, r_eff, f_n, dt):
         dt: Time step [s].
 
     Returns:
-        Torque [N m] against ``spin``: μ_r R* F_n (MODEL.md §5.1, [OURS]), capped at the value
+        Torque [N m] against ``spin``: μ_r R* F_n (MODEL §5.1, [OURS]), capped at the value
         that stops the rolling within the step (the time-resolved form of the §5.2 cap).
     """
     need = inertia * spin / dt

@@ -8,13 +8,13 @@ DEM-customary fractions of the contact time (t_c/20, t_c/50):
   positions and half-step velocities, half kick;
 * neighbours from a linked-cell grid rebuilt every step (cells at least one largest diameter
   wide, so only the 27 surrounding cells can hold a partner); periodic axes wrap;
-* normal force: Hertz (MODEL.md §3.1, E* and R* from the pair row), plus the restitution dashpot
+* normal force: Hertz (MODEL §3.1, E* and R* from the pair row), plus the restitution dashpot
   of :func:`hsgran.dem.law.dashpot_force` when the pair prescribes e_n (the coefficient is
   calibrated so that one binary impact gives exactly that e_n), the total clamped at ≥ 0;
 * tangential force (with ``friction``): history-free Coulomb, F_t = −min(μ F_n, (m_t*/τ) |u|) û
   (LAMMPS' ``tangential linear_nohistory`` form). τ = ``SLIP_TIME_FRACTION`` t_c is a short
   relaxation time, so a sticking contact stops slipping well within the contact, as the
-  impulse model's rigid sticking assumes (MODEL.md §4.2);
+  impulse model's rigid sticking assumes (MODEL §4.2);
 * planes are walls with the same law (R* = R of the sphere).
 
 Only what hsgran's scenes of the many-particle comparison need is supported: gravity, rotation,
@@ -77,7 +77,7 @@ def _contact(i, j_or_wall, nx, ny, nz, d, vrel_x, vrel_y, vrel_z, r_eff, m_eff, 
     """
     vn = vrel_x * nx + vrel_y * ny + vrel_z * nz
     sd = math.sqrt(d)
-    fn = (4.0 / 3.0) * e_star * math.sqrt(r_eff) * d * sd  # MODEL.md §3.1
+    fn = (4.0 / 3.0) * e_star * math.sqrt(r_eff) * d * sd  # MODEL §3.1
     if coef > 0.0:
         s_n = 2.0 * e_star * math.sqrt(r_eff) * sd
         fn += coef * math.sqrt(m_eff * s_n) * (-vn)
@@ -197,7 +197,7 @@ def _forces(pos, vel, omg, force, torque, radius, mass, mat, e_star, mu, coef, i
                 nx = dx / dist
                 ny = dy / dist
                 nz = dz / dist
-                # ΔV = (V_i − V_j) − (R_i ω_i + R_j ω_j) × n (MODEL.md §2)
+                # ΔV = (V_i − V_j) − (R_i ω_i + R_j ω_j) × n (MODEL §2)
                 sx = ri * omg[i, 0] + rj * omg[j, 0]
                 sy = ri * omg[i, 1] + rj * omg[j, 1]
                 sz = ri * omg[i, 2] + rj * omg[j, 2]
@@ -341,7 +341,7 @@ class FixedStepRun:
 
 def scene_contact_time(scene, speed: float) -> float:
     """Shortest elastic Hertz contact duration t_c [s] of the scene's sphere–sphere and
-    sphere–wall pairs at impact speed ``speed`` [m/s] (MODEL.md §3.1), smallest spheres.
+    sphere–wall pairs at impact speed ``speed`` [m/s] (MODEL §3.1), smallest spheres.
 
     DEM practice sets dt as a fraction of t_c at the largest expected impact speed; the
     smallest sphere with the stiffest partner gives the shortest contact.

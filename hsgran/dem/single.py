@@ -1,7 +1,7 @@
 """One sphere–wall impact integrated through the contact with a fixed time step (soft sphere).
 
 This is the time-resolved reference of the impulse model: the same contact law
-(:mod:`hsgran.dem.law`, built on MODEL.md §3–§5 and the pair row of
+(:mod:`hsgran.dem.law`, built on MODEL §3–§5 and the pair row of
 :func:`hsgran.materials.pair_row`) advanced by velocity Verlet, the scheme of LAMMPS' and
 LIGGGHTS' granular integrators: half kick, drift, forces from the new overlap and the
 half-step velocities, half kick. The contact starts with the surfaces touching and ends when
@@ -10,7 +10,7 @@ the force has vanished with the surfaces separating (δ ≤ δ_res after the pea
 Frame (as :func:`hsgran.impact.oblique_velocity`): wall normal +z, the sphere moves towards +x,
 the spin ω about +y is positive in the forward-rolling sense, contact-point slip u = v_t − R ω.
 
-Where the impulse model claims equivalence (MODEL.md §3.5–3.9: the normal law integrated in
+Where the impulse model claims equivalence (MODEL §3.5–3.9: the normal law integrated in
 energy; §4.2: rigid-body friction), the outcomes here converge to it as dt → 0 at the order of
 the scheme; where it does not (a tangential spring, a restitution dashpot), they are DEM
 practice and the differences are findings of docs/accuracy-cost.md.
@@ -139,7 +139,7 @@ def _impact(v0, vt0, w0, radius, mass, inertia, r_eff, row, f0, g_star, coef, dt
                 unloading = True
                 r_p, d_res = unloading_curve(d_max, r_eff, row, plasticity)
         if unloading and dd > 0.0 and d > d_res:
-            # approaching again during recovery: adhesion has won (MODEL.md §3.8 capture)
+            # approaching again during recovery: adhesion has won (MODEL §3.8 capture)
             captured = True
             break
         a = 0.0
@@ -314,7 +314,7 @@ def resolved_wall_impact(sphere: Material, wall: Material, radius: float, speed:
         contact: Pair properties (as :func:`hsgran.impact.sphere_wall_impact`).
         effects: Enabled effects (default: all).
         steps_per_contact: dt = t_c / this, with t_c the elastic Hertz duration at the normal
-            impact speed (MODEL.md §3.1), the DEM custom for choosing a time step [-].
+            impact speed (MODEL §3.1), the DEM custom for choosing a time step [-].
         tangential: ``"coulomb"`` (rigid sticking, the impulse model's assumption) or
             ``"mindlin"`` (tangential spring k_t = 8 G* a with a Coulomb cap).
 
@@ -325,7 +325,7 @@ def resolved_wall_impact(sphere: Material, wall: Material, radius: float, speed:
         InputError: non-physical input.
 
     References:
-        MODEL.md §3 (normal law), §3.8 (adhesion), §4 (friction), §5.1 (rolling torque).
+        MODEL §3 (normal law), §3.8 (adhesion), §4 (friction), §5.1 (rolling torque).
     """
     setup = _Setup(sphere, wall, radius, contact, effects, tangential)
     v0, vt0, w0 = _initial(speed, angle_deg, spin)

@@ -4,7 +4,7 @@ A queue of a fixed set of entries (one per sphere and the frame tick), each with
 (time, seq) at a time; ``inf`` means "nothing scheduled". The key of entry e is
 ``key_time[e], key_seq[e]`` (the loop's ``ev_t`` and ``ev_seq``): the caller sets them and then
 calls :func:`calendar_update`. :func:`calendar_top` gives the entry with the earliest key, ties in
-time broken by ``seq`` (a total order: runs are reproducible, DESIGN.md §3).
+time broken by ``seq`` (a total order: runs are reproducible, docs/architecture.md §3).
 
 Structure (Paul, J. Comput. Phys. 221, 615 (2007): an O(1) queue for event-driven simulation;
 our implementation):

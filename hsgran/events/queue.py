@@ -2,7 +2,8 @@
 
 The event calendar (:mod:`hsgran.events.calendar`) keeps the events of its current time bucket
 here. Ties in time are broken by the sequence number ``seq``, which the scheduler increments at
-every prediction: the order is total, so runs are bit-for-bit reproducible (DESIGN.md §3).
+every prediction: the order is total, so runs are bit-for-bit reproducible
+(docs/architecture.md §3).
 
 Layout, chosen for the cache:
 

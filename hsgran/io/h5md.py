@@ -4,9 +4,9 @@
 The layout, every attribute and every unit are described for users in
 ``docs/trajectory-format.md``; this docstring only gives the reasons behind the choices.
 
-* Frames are buffered by the caller and appended in blocks (DESIGN.md §4): every dataset is
-  created once, chunked along time and resizable, compressed with ``lzf`` + shuffle (lossless,
-  so a round trip is bit for bit).
+* Frames are buffered by the caller and appended in blocks (docs/architecture.md §4): every
+  dataset is created once, chunked along time and resizable, compressed with ``lzf`` + shuffle
+  (lossless, so a round trip is bit for bit).
 * Every per-frame dataset comes from one table, :data:`FRAME_FIELDS`, which the writer, the
   reader and :func:`copy_frames` all walk, so a new frame quantity cannot be written and then
   forgotten by the reader or by resume.

@@ -3,8 +3,8 @@
 
 Each case (:data:`CASES`) runs one or more scene files of ``scenarios/validation/`` through the
 event-driven engine (:class:`hsgran.engine.Simulation`), compares the outcome with its
-reference — closed forms of MODEL.md, the digitised benchmark curves and derived tables shipped
-in ``hsgran/data`` (provenance in its README.md), the regression anchors of MODEL.md §7.1 — and
+reference — closed forms of docs/model.md, the digitised benchmark curves and derived tables shipped
+in ``hsgran/data`` (provenance in its README.md), the regression anchors of MODEL §7.1 — and
 draws one figure. :func:`run_validation` runs them and writes ``report.md`` with the table
 (case, quantity, reference, hsgran, deviation, tolerance, result) and a sentence on every known
 disagreement.
@@ -32,7 +32,7 @@ CASES: tuple[Case, ...] = (*normal.CASES[:2], *chung_ooi.CASES, oblique.CASES[0]
                            oblique.CASES[1], *enduring.CASES, normal.CASES[2],
                            oblique.CASES[2])
 CASE_NAMES = tuple(c.name for c in CASES)
-#: Cases run by ``fast=True`` (the CI subset): one of each kind of reference — MODEL.md §7.1
+#: Cases run by ``fast=True`` (the CI subset): one of each kind of reference — MODEL §7.1
 #: anchors with adhesion, digitised curves and derived tables (Hertz), digitised DEM curves
 #: with known disagreements, closed forms with spin, enduring contact — chosen for having the
 #: fewest engine events, so that the suite stays quick without the JIT compiler.

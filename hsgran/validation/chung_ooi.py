@@ -6,7 +6,7 @@ References and tolerances:
 
 * derived Hertz table (tests 1, 2): half a unit in the last printed digit;
 * Kratos digitisations of Chung & Ooi's figures (tests 1, 2, 4, 5, 6): the digitising error;
-* MODEL.md closed forms (§3.1 Hertz, §4.2–4.3 rigid-body sliding/rolling): round-off;
+* docs/model.md closed forms (§3.1 Hertz, §4.2–4.3 rigid-body sliding/rolling): round-off;
 * exact expectations (tests 3, 7): round-off or exact.
 
 Frames and signs (as in :mod:`hsgran.impact`): wall normal +z, the sphere (or its contact point)
@@ -14,8 +14,8 @@ moves towards +x, spin about +y positive in the forward-rolling sense; the conta
 −R ẑ moves at u = v_x − R ω_y. Chung & Ooi (and Kratos) count forward rolling as a *negative*
 spin, so their ω′ is compared with −ω_y.
 
-Tests 3–6 prescribe e_n (the normal model is bypassed, MODEL.md §3.9) or are elastic; the
-tangential model is rigid-body (MODEL.md §4), which the DEM curves (with tangential elasticity)
+Tests 3–6 prescribe e_n (the normal model is bypassed, MODEL §3.9) or are elastic; the
+tangential model is rigid-body (MODEL §4), which the DEM curves (with tangential elasticity)
 must match only in the gross-sliding range: the sticking range is reported as a known
 disagreement.
 """
@@ -72,11 +72,11 @@ ANGLE_GRID = tuple(float(a) for a in range(1, 90, 2))
 ABSCISSA_RTOL = 1e-9
 
 KNOWN_STICKING = (
-    "Sticking range: hsgran's tangential model is rigid-body (MODEL.md §4, [P]): once the "
+    "Sticking range: hsgran's tangential model is rigid-body (MODEL §4, [P]): once the "
     "contact point stops slipping it stays stopped, so β = 0, e_t = 5/7 and the contact-patch "
     "angle is 0. The DEM includes tangential (Mindlin-type) elasticity, whose recoil makes the "
     "contact point bounce back or overshoot; the model cannot reproduce that (Walton's β0 = 0, "
-    "MODEL.md §4.4).")
+    "MODEL §4.4).")
 
 
 def find_abscissa(values: np.ndarray, target: float, what: str) -> int:
@@ -233,7 +233,7 @@ def _run_hertz(ctx: CaseContext, name: str, title: str, pairs: bool) -> CaseResu
     res.checks += _digitised_force_checks(f_overlap, f_time, one, e_star, r_star)
     res.notes.append(
         "hsgran's impacts are instantaneous: the engine yields the outcome (e_n, impulse), and "
-        "the force history is the one its normal model integrates (Hertz, MODEL.md §3.1), "
+        "the force history is the one its normal model integrates (Hertz, MODEL §3.1), "
         "reported by the one-event API for the same collision (its impulse equals the engine's).")
     _figure_hertz(ctx, name, title, f_overlap, f_time, one, e_star, r_star)
     res.figure = ctx.figure_path
@@ -331,7 +331,7 @@ def _co3_scenes() -> dict[str, str]:
         Validation case co3 (hsgran validate): Chung & Ooi (2011) benchmark test 3. Spheres (R
         = 2.5 mm) of aluminium oxide (E = 380 GPa, nu = 0.23, rho = 4000) and cast iron (E = 100
         GPa, nu = 0.25, rho = 7000) hit a rigid plane at 3.9 m/s with a prescribed normal
-        restitution e_n = 0, 0.1, ..., 1 (MODEL.md §3.9), frictionless. Each (material, e_n) is
+        restitution e_n = 0, 0.1, ..., 1 (MODEL §3.9), frictionless. Each (material, e_n) is
         its own material name so that each sphere has its own contact with the plane. The
         rebound speed must be e_n times the impact speed. No gravity.
 
@@ -374,7 +374,7 @@ def run_co3(ctx: CaseContext) -> CaseResult:
         series.setdefault(mat, []).append((e_set, v[2] / v0))
     res.checks.append(Check("rebound speed / impact speed", "prescribed e_n", ratio_pts,
                             "round-off"))
-    res.checks.append(Check("J_n = (1 + e_n) m v0 (MODEL.md §3.6)", "prescribed e_n", imp_pts,
+    res.checks.append(Check("J_n = (1 + e_n) m v0 (MODEL §3.6)", "prescribed e_n", imp_pts,
                             "round-off", unit="N s"))
     res.checks.append(Check("tangential velocity after (frictionless, head-on)",
                             "no tangential impulse", tang_pts, "exact", unit="m/s"))
@@ -598,9 +598,9 @@ def closed_form_checks(outcomes, closed_of) -> list[Check]:
             pts.setdefault(q, []).append(Point(at, ref, got, closed_form_tolerance(ref,
                                                                                   scale[q])))
     checks = [Check(f"{CLOSED_FORM_LABELS.get(q, q)} at every sphere",
-                    "MODEL.md §4.3 closed form", p, "closed form") for q, p in pts.items()]
+                    "MODEL §4.3 closed form", p, "closed form") for q, p in pts.items()]
     checks.append(Check("regime (rolling/sliding) at every sphere (1 = same)",
-                        "MODEL.md §4.2 criterion", reg, "exact"))
+                        "MODEL §4.2 criterion", reg, "exact"))
     checks.append(Check("velocity and spin off the plane of incidence", "planar impact",
                         [Point(o["material"], 0.0, o["off_plane"], 0.0) for o in outcomes],
                         "exact"))
@@ -644,7 +644,7 @@ def figure_oblique(ctx, title, outcomes, table, series_map, closed, theta_c):
     grid = np.linspace(0.5, 89.5, 400)
     for ax, (q, (label, sign)) in zip(axes, CO4_QUANTITIES.items(), strict=True):
         ax.plot(grid, [sign * closed(a)[q] for a in grid], "-", color="0.6", lw=3,
-                label="MODEL.md §4.3 (rigid body)")
+                label="MODEL §4.3 (rigid body)")
         for c, (series, mat) in enumerate(series_map.items()):
             xs, ys = long_series(table, series, q, "incident_angle_from_normal_deg", "value")
             ax.plot(xs, ys, color=f"C{c + 1}", label=series.replace("_", " ") + " (digitised)",
@@ -730,7 +730,7 @@ def run_co5(ctx: CaseContext) -> CaseResult:
                                closed_form_tolerance(ref, max(float(p), 1.0))))
     for q, pts in cl.items():
         res.checks.append(Check(f"{CO5_QUANTITIES[q]} at every sphere",
-                                "MODEL.md §4.3 closed form", pts, "closed form"))
+                                "MODEL §4.3 closed form", pts, "closed form"))
     table = refdata.read_csv(CO5_FILE)
     for idx, (q, label) in enumerate(CO5_QUANTITIES.items()):
         x_span, y_span = quantity_extent(table, q, CO5_XCOL, "value")
@@ -757,7 +757,7 @@ def run_co5(ctx: CaseContext) -> CaseResult:
     grid = np.linspace(0.01, 20.0, 400)
     for idx, (ax, (q, label)) in enumerate(zip(axes, CO5_QUANTITIES.items(), strict=True)):
         ax.plot(grid, [_co5_closed(g)[idx] for g in grid], "-", color="0.6", lw=3,
-                label="MODEL.md §4.3 (rigid body)")
+                label="MODEL §4.3 (rigid body)")
         for c, series in enumerate(CO5_SERIES):
             xs, ys = long_series(table, series, q, CO5_XCOL, "value")
             ax.plot(xs, ys, color=f"C{c + 1}", label=series.replace("_", " ") + " (digitised)",
@@ -781,7 +781,7 @@ def run_co5(ctx: CaseContext) -> CaseResult:
 CO6_FILE = "chung_ooi_2011_test6_reference.csv"
 CO6_RADIUS, CO6_NORMAL_SPEED, CO6_MU, CO6_E_N = 0.1, 0.2, 0.4, 0.5
 CO6_SERIES = ("DEM_Al_alloy", "DEM_nylon")
-#: 3.5 μ (1 + e_n) = 2.1: sliding/rolling boundary in tan(incidence) (MODEL.md §4.3).
+#: 3.5 μ (1 + e_n) = 2.1: sliding/rolling boundary in tan(incidence) (MODEL §4.3).
 CO6_T_CRIT = 3.5 * CO6_MU * (1.0 + CO6_E_N)
 #: tan(incidence) at 1°, 3°, ..., 87°. Through math.tan, not numpy's: numpy picks its
 #: vector kernels by CPU at run time and its tan(3°) is one ulp lower on a CPU with
@@ -882,7 +882,7 @@ def run_co6(ctx: CaseContext) -> CaseResult:
         x_max = 1.05 * max(long_series(table, s, q, "x", "y")[0].max() for s in CO6_SERIES)
         grid = np.linspace(xs_model.min(), x_max, 400)
         ax.plot(grid, [_co6_closed(to_u0(g))[q] for g in grid], "-", color="0.6", lw=3,
-                label="MODEL.md §4.3 (rigid body)")
+                label="MODEL §4.3 (rigid body)")
         for c, series in enumerate(CO6_SERIES):
             xs, ys = long_series(table, series, q, "x", "y")
             ax.plot(xs, ys, color=f"C{c + 1}", label=series.replace("_", " ") + " (digitised)",

@@ -48,7 +48,7 @@ CLOSED_FORM_RTOL = 1e-9
 ROUNDOFF_RTOL = 1e-12
 #: The capture speed is found by bisection on the engine's capture outcome; the bisection stops
 #: at this relative bracket width, so the engine value is known to it (far below the 1e-3
-#: printing unit of the MODEL.md §7.1 anchor).
+#: printing unit of the MODEL §7.1 anchor).
 BISECTION_RTOL = 1e-7
 #: Relative slack added to a half-unit-in-the-last-digit tolerance: it only absorbs the binary
 #: representation of the printed decimal numbers.
@@ -71,7 +71,7 @@ TOLERANCE_RULES = {
         f"relative {ROUNDOFF_RTOL:g}: a conservation law or identity evaluated in double "
         "precision"),
     "printed digit": (
-        "one unit in the last printed digit of a MODEL.md §7.1 anchor: the anchors are "
+        "one unit in the last printed digit of a MODEL §7.1 anchor: the anchors are "
         "rounded values of two independent implementations, and double rounding (to 5 figures, "
         "then 4) can move an entry by more than half a unit"),
     "half digit": (

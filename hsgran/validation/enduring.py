@@ -1,8 +1,8 @@
 """Enduring contact: a sphere moving on a flat plate under gravity, and spheres on an incline
-(MODEL.md §5.3; VALIDATION.md PL).
+(MODEL §5.3; VALIDATION.md PL).
 
 No experiment was found for the plate case; the references are closed forms: the derived table
-``derived_sphere_on_plate_closed_form.csv`` (MODEL.md §5.3 evaluated by us, printed to six
+``derived_sphere_on_plate_closed_form.csv`` (MODEL §5.3 evaluated by us, printed to six
 decimals), the same formulas evaluated afresh here, and for the incline the rigid-body
 mechanics of a sphere released on a tilted plane. The engine advances a sphere on a plane
 analytically between scheduled transitions, so it must meet them to round-off.
@@ -42,7 +42,7 @@ PLATE_COLUMNS = {"t_slide_end_s": "t_slide", "v_at_roll_start_m_s": "v_roll",
 #: Event kind of a motion-state change in the engine's log (hsgran.engine.EventBlock.kind).
 STATE_EVENT = 7
 #: Steel-like constants of the plate cases' spheres and plate (irrelevant to the on-plane
-#: motion, which depends only on μ_s, μ_r, R and g; MODEL.md §5.3).
+#: motion, which depends only on μ_s, μ_r, R and g; MODEL §5.3).
 STEEL = {"density": 7800.0, "youngs_modulus": 200e9, "poisson_ratio": 0.3}
 
 
@@ -63,7 +63,7 @@ def _plate_scenes() -> dict[str, str]:
         st = SceneText(
             comment=f"""
             Validation case plate (hsgran validate), convention {conv} ({long_name}): the
-            paper's sphere moving on a flat plate under gravity (MODEL.md §5.3). Four spheres,
+            paper's sphere moving on a flat plate under gravity (MODEL §5.3). Four spheres,
             the parameter sets P1-P4 of hsgran/data/{PLATE_FILE}, are launched without spin
             along +x on a horizontal plate; each slides until its contact point stops slipping
             (instant C), rolls against rolling friction and stops (C'). Each sphere has its own
@@ -163,10 +163,10 @@ def run_plate(ctx: CaseContext) -> CaseResult:
         res.checks.append(Check(col, f"{PLATE_FILE} (printed to 6 decimals)", pts,
                                 "half digit"))
     for col, pts in closed_pts.items():
-        res.checks.append(Check(col, "MODEL.md §5.3 evaluated here", pts, "closed form"))
+        res.checks.append(Check(col, "MODEL §5.3 evaluated here", pts, "closed form"))
     res.notes += [
         "No experiment of a sphere sliding and rolling on a plate was found (VALIDATION.md, PL): "
-        "the references are the closed form of MODEL.md §5.3 (rigid-body mechanics, [LIT]).",
+        "the references are the closed form of MODEL §5.3 (rigid-body mechanics, [LIT]).",
         "[OURS] Whether the rolling torque also acts while the sphere slides is not known from "
         "the paper: both conventions are run (A: it does; B: only while rolling).",
     ]
@@ -308,7 +308,7 @@ CASE_PLATE = Case(
     "plate", "Sphere moving on a flat plate under gravity",
     "Four spheres (the parameter sets of the derived table) launched along a plate slide, roll "
     "and stop: the instant and speed at which rolling starts, the distance slid, the stop time "
-    "and distance against the table and MODEL.md §5.3, for both rolling-torque conventions.",
+    "and distance against the table and MODEL §5.3, for both rolling-torque conventions.",
     _plate_scenes, run_plate)
 CASE_INCLINE = Case(
     "incline", "Spheres rolling (or sliding) down an incline",

@@ -1,11 +1,11 @@
-"""Closed forms of MODEL.md that the validation compares the engine with (layer 6).
+"""Closed forms of docs/model.md that the validation compares the engine with (layer 6).
 
-These are written again here, from the equations of MODEL.md, rather than imported from the
+These are written again here, from the equations of docs/model.md, rather than imported from the
 collision kernels: a reference evaluated by the code under test would check nothing. They are
 plain Python (scalar in, scalar out) and use scipy only for root finding and the incomplete
 beta function.
 
-Provenance follows MODEL.md: §3.1–3.2 and §3.6 [LIT]; the elastic–plastic and fully plastic
+Provenance follows docs/model.md: §3.1–3.2 and §3.6 [LIT]; the elastic–plastic and fully plastic
 stages §3.3–3.4 are **[OURS]** reconstructions; the recovery §3.7 [YT]/[LIT]; the f0 estimate
 of §3.8 [OURS, low confidence]; §4 rigid-body tangential model [P]/[LIT]; §5.3 [LIT].
 """
@@ -19,22 +19,22 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.special import betaincinv
 
-#: Moment of inertia factor of a solid sphere, k = I/(m R²) (MODEL.md §4.3, §8).
+#: Moment of inertia factor of a solid sphere, k = I/(m R²) (MODEL §4.3, §8).
 K_SOLID = 0.4
-#: Model defaults of MODEL.md §8: first-yield factor c, hardness factor κ, ρ_p = δ_p/δ_y.
+#: Model defaults of MODEL §8: first-yield factor c, hardness factor κ, ρ_p = δ_p/δ_y.
 YIELD_FACTOR, HARDNESS_FACTOR, PLASTIC_RATIO = 1.6, 2.8, 110.0
 #: Exact Hertz contact-duration coefficient: t_c = C (m*²/(R* E*² v0))^(1/5) with
 #: C = 2 (15/16)^(2/5) ∫0^1 (1 − x^(5/2))^(−1/2) dx, the integral being (2/5) B(2/5, 1/2).
 HERTZ_TC_COEF = (2.0 * (15.0 / 16.0) ** 0.4 * 0.4
                  * math.gamma(0.4) * math.gamma(0.5) / math.gamma(0.9))
 #: Coefficient of the JKR-matched line force f0 = C (E* R* Δγ²)^(1/3), C = (3/4)(8/(9π))^(1/3)
-#: (MODEL.md §3.8, [OURS]).
+#: (MODEL §3.8, [OURS]).
 JKR_LINE_FORCE_COEF = 0.75 * (8.0 / (9.0 * math.pi)) ** (1.0 / 3.0)
 #: Relative tolerance of the root finds below: far below the 1e-9 of the comparisons.
 ROOT_RTOL = 1e-15
 
 
-# ---- effective properties (MODEL.md §2) --------------------------------------------------
+# ---- effective properties (MODEL §2) --------------------------------------------------
 
 def effective_modulus(e1: float, nu1: float, e2: float = math.inf, nu2: float = 0.0) -> float:
     """E* [Pa] from 1/E* = (1 − ν1²)/E1 + (1 − ν2²)/E2 (a rigid body, E = ∞, drops out)."""
@@ -47,11 +47,11 @@ def sphere_mass(density: float, radius: float) -> float:
 
 
 def jkr_line_force(e_star: float, r_star: float, work_of_adhesion: float) -> float:
-    """f0 = 0.4924 (E* R* Δγ²)^(1/3) [N/m] (MODEL.md §3.8, [OURS, low confidence])."""
+    """f0 = 0.4924 (E* R* Δγ²)^(1/3) [N/m] (MODEL §3.8, [OURS, low confidence])."""
     return JKR_LINE_FORCE_COEF * (e_star * r_star * work_of_adhesion**2) ** (1.0 / 3.0)
 
 
-# ---- normal model (MODEL.md §3) ----------------------------------------------------------
+# ---- normal model (MODEL §3) ----------------------------------------------------------
 
 @dataclass(frozen=True)
 class NormalOutcome:
@@ -67,7 +67,7 @@ class NormalOutcome:
 
 @dataclass(frozen=True)
 class StagedPair:
-    """A pair in the staged normal model of MODEL.md §3 (SI units).
+    """A pair in the staged normal model of MODEL §3 (SI units).
 
     Attributes:
         e_star, r_star, m_star: Effective modulus [Pa], radius [m] and mass [kg] (§2).
@@ -181,11 +181,11 @@ class StagedPair:
         return brentq(margin, low, high, xtol=1e-300, rtol=ROOT_RTOL, maxiter=500)
 
 
-# ---- Hertz impact (MODEL.md §3.1) --------------------------------------------------------
+# ---- Hertz impact (MODEL §3.1) --------------------------------------------------------
 
 def hertz_maxima(e_star: float, r_star: float, m_star: float, v0: float) -> dict[str, float]:
     """δ_max [m], F_max [N], a_max [m] and the exact contact duration t_c [s] of an elastic
-    impact at normal speed v0 [m/s] (MODEL.md §3.1)."""
+    impact at normal speed v0 [m/s] (MODEL §3.1)."""
     d = (15.0 * m_star * v0**2 / (16.0 * e_star * math.sqrt(r_star))) ** 0.4
     return {"delta_max": d,
             "force_max": 4.0 / 3.0 * e_star * math.sqrt(r_star) * d**1.5,
@@ -194,7 +194,7 @@ def hertz_maxima(e_star: float, r_star: float, m_star: float, v0: float) -> dict
 
 
 def hertz_force(delta: float, e_star: float, r_star: float) -> float:
-    """F = (4/3) E* R*^(1/2) δ^(3/2) [N] (MODEL.md §3.1)."""
+    """F = (4/3) E* R*^(1/2) δ^(3/2) [N] (MODEL §3.1)."""
     return 4.0 / 3.0 * e_star * math.sqrt(r_star) * max(delta, 0.0) ** 1.5
 
 
@@ -211,11 +211,11 @@ def hertz_pulse(t: float, force_max: float, contact_time: float) -> float:
     return force_max * float(betaincinv(0.4, 0.5, phase)) ** 0.6
 
 
-# ---- rigid-body tangential model (MODEL.md §4) -------------------------------------------
+# ---- rigid-body tangential model (MODEL §4) -------------------------------------------
 
 @dataclass(frozen=True)
 class WallOblique:
-    """Outcome of a sphere–wall impact in the rigid-body tangential model (MODEL.md §4.3).
+    """Outcome of a sphere–wall impact in the rigid-body tangential model (MODEL §4.3).
 
     Frame: wall normal n, the contact point slips along t̂ before impact, spins about n × t̂
     (positive: forward rolling for a sphere moving along +t̂).
@@ -231,7 +231,7 @@ class WallOblique:
 
 def wall_oblique(v_n0: float, v_t0: float, omega0: float, radius: float, mu: float,
                  e_n: float) -> WallOblique:
-    """Rigid-body outcome of a sphere hitting a wall (MODEL.md §4.2–4.3, with initial spin).
+    """Rigid-body outcome of a sphere hitting a wall (MODEL §4.2–4.3, with initial spin).
 
     Args:
         v_n0: Normal approach speed [m/s], > 0.
@@ -256,11 +256,11 @@ def wall_oblique(v_n0: float, v_t0: float, omega0: float, radius: float, mu: flo
 
 
 def critical_angle_deg(mu: float, e_n: float) -> float:
-    """θ_c from tan θ_c = (1 + 1/k) μ (1 + e_n) (MODEL.md §4.3) [deg]."""
+    """θ_c from tan θ_c = (1 + 1/k) μ (1 + e_n) (MODEL §4.3) [deg]."""
     return math.degrees(math.atan((1.0 + 1.0 / K_SOLID) * mu * (1.0 + e_n)))
 
 
-# ---- enduring contact (MODEL.md §5.3; incline: rigid-body mechanics [LIT]) ----------------
+# ---- enduring contact (MODEL §5.3; incline: rigid-body mechanics [LIT]) ----------------
 
 def incline_acceleration(theta: float, mu_s: float, mu_r: float, g: float) -> tuple[str, float]:
     """Motion of a sphere released at rest on a plane tilted by θ [rad].
@@ -284,7 +284,7 @@ def incline_acceleration(theta: float, mu_s: float, mu_r: float, g: float) -> tu
 
 def plate_closed_form(v0: float, omega0: float, radius: float, mu_s: float, mu_r: float,
                       g: float, convention: str) -> dict[str, float]:
-    """Sphere launched along a horizontal plate: slide, roll, stop (MODEL.md §5.3).
+    """Sphere launched along a horizontal plate: slide, roll, stop (MODEL §5.3).
 
     Args:
         v0: Initial centre speed [m/s], > 0.
@@ -318,7 +318,7 @@ def plate_closed_form(v0: float, omega0: float, radius: float, mu_s: float, mu_r
 
 def pair_rigid(v1, w1, v2, w2, normal, m1: float, m2: float, r1: float, r2: float, mu: float,
                e_n: float):
-    """Two solid spheres in the rigid-body impulse model (MODEL.md §2, §4.1–4.2), vector form.
+    """Two solid spheres in the rigid-body impulse model (MODEL §2, §4.1–4.2), vector form.
 
     Args:
         v1, w1, v2, w2: Centre velocities [m/s] and spins [rad/s] before, (3,) each.

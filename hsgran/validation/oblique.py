@@ -114,7 +114,7 @@ def run_kharaz(ctx: CaseContext) -> CaseResult:
     e_n = e_values.pop()
     pair = staged_pair(scene, 0, wall=True)
     res.checks.append(Check(
-        "e_n of hsgran's normal model (all angles)", "MODEL.md §3 evaluated independently",
+        "e_n of hsgran's normal model (all angles)", "MODEL §3 evaluated independently",
         [Point(f"v_n = {o['v_n0']:.3g} m/s", pair.impact(o["v_n0"]).e_n, o["e_n"],
                closed_form_tolerance(1.0)) for o in outcomes], "closed form"))
     res.checks.append(Check(
@@ -122,7 +122,7 @@ def run_kharaz(ctx: CaseContext) -> CaseResult:
         [Point("all angles", KHARAZ_E_N_USED, e_n)], kind="known",
         note=f"The impacts stay below the pair's yield speed ({pair.speed_y:.3g} m/s), where the "
              "reconstructed normal model is exactly elastic (e_n = 1); real spheres lose a few "
-             "per cent there (MODEL.md §9). The 2 % difference changes the friction impulse "
+             "per cent there (MODEL §9). The 2 % difference changes the friction impulse "
              "μ (1 + e_n) m V_n by 1 %, which stays inside the digitising error below."))
     theta_c = cf.critical_angle_deg(KHARAZ_MU, e_n)
 
@@ -184,7 +184,7 @@ def _spin_scenes() -> dict[str, str]:
     st = SceneText(
         comment=f"""
         Validation case spin_wall (hsgran validate): impacts with initial spin, in the geometry
-        of Dong & Moys (2006): a steel ball of 44.5 mm diameter (the MODEL.md §7.1 steel, sigma_y
+        of Dong & Moys (2006): a steel ball of 44.5 mm diameter (the MODEL §7.1 steel, sigma_y
         = 1 GPa) on a steel flat, normal speed {SPIN_NORMAL_SPEED:g} m/s, mu = {SPIN_MU:g} (Dong &
         Moys's values were not retrieved: our choice). For each effective angle tan(theta_eff) =
         u0/V_n (2..86 degrees) five families of spheres share the contact-point slip u0 but
@@ -237,7 +237,7 @@ def run_spin_wall(ctx: CaseContext) -> CaseResult:
         o["j_t_per_m"] = o["j_t"] / o["mass"]
         en_pts.append(Point(f"{o['family']}, u0 = {o['u0']:.3g}", pair.impact(o["v_n0"]).e_n,
                             o["e_n"], closed_form_tolerance(1.0)))
-    res.checks.append(Check("e_n, whatever the spin", "MODEL.md §3 at V_n (spin does not enter)",
+    res.checks.append(Check("e_n, whatever the spin", "MODEL §3 at V_n (spin does not enter)",
                             en_pts, "closed form"))
 
     def closed_of(o):
@@ -278,7 +278,7 @@ def run_spin_wall(ctx: CaseContext) -> CaseResult:
     e_n = outcomes[0]["e_n"]
     grid = np.linspace(0.01, math.tan(math.radians(max(SPIN_EFFECTIVE_ANGLES))), 300)
     ax1.plot(grid, [-cf.wall_oblique(1.0, t, 0.0, 1.0, SPIN_MU, e_n).slip / t for t in grid],
-             "-", color="0.6", lw=3, label="MODEL.md §4.3 (rigid body)")
+             "-", color="0.6", lw=3, label="MODEL §4.3 (rigid body)")
     for c, fam in enumerate(SPIN_FAMILIES):
         mine = sorted((o["u0"] / o["v_n0"], o["beta"], o["omega"] * o["radius"] / o["v_n0"])
                       for o in outcomes if o["family"] == fam)
@@ -295,7 +295,7 @@ def run_spin_wall(ctx: CaseContext) -> CaseResult:
     ax1.legend(fontsize=7)
     ax2.set_xscale("log")
     ax2.set_xlabel("tan θ_eff = |u0| / V_n")
-    ax2.set_ylabel("R ω′ / V_n (spin after; lines: MODEL.md §4.3)")
+    ax2.set_ylabel("R ω′ / V_n (spin after; lines: MODEL §4.3)")
     return finish_figure(fig, ctx, res)
 
 
@@ -432,19 +432,19 @@ def run_pp_oblique(ctx: CaseContext) -> CaseResult:
         plot.setdefault(fam, []).append((x, beta, j_t / (PP_MU * want[5])))
     res.checks.append(Check("β = −u′/u0 against x", "rigid body: x − 1 (x < 1), 0 (x ≥ 1)",
                             checks.pop("β = −u′/u0 against x"), "closed form"))
-    res.checks.append(Check("regime (1 = same as the closed form)", "MODEL.md §4.2 criterion",
+    res.checks.append(Check("regime (1 = same as the closed form)", "MODEL §4.2 criterion",
                             reg_pts, "exact"))
     for name, pts in checks.items():
         rule = "round-off" if "momentum" in name else "closed form"
-        ref = ("MODEL.md §4.1–4.2 (vector form)" if "|" in name else
-               "MODEL.md §7 invariants 1 and 13")
+        ref = ("MODEL §4.1–4.2 (vector form)" if "|" in name else
+               "MODEL §7 invariants 1 and 13")
         res.checks.append(Check(name, ref, pts, rule))
     res.notes += [
         "Chung & Ooi's test 8 curves (the DEM reference for this set-up) are withheld for an "
         "independent check and the paper's particle–particle data source (candidate: Foerster "
         "et al. 1994) was not retrieved: the pair is compared with the rigid-body solution "
         "and the conservation laws only. Real spheres show a positive β0 in the sticking range "
-        "(tangential compliance), which this model cannot give (MODEL.md §4.4).",
+        "(tangential compliance), which this model cannot give (MODEL §4.4).",
     ]
     fig, (ax1, ax2) = new_figure(2, title="Particle–particle impacts with spin (R1 = 0.1 m on "
                                           "R2 = 0.5 m), μ = 0.4, e_n = 0.5")

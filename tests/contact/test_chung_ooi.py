@@ -13,7 +13,7 @@ The reference tables live in ``hsgran/data`` (see its README.md) and are read th
 Frames and signs. Sphere–wall cases use the frame of :func:`hsgran.impact.oblique_velocity`:
 wall normal +z, sphere moving towards +x, spin about +y (= n × t̂) positive in the
 forward-rolling sense. The sphere's contact point is at −R n, so its tangential velocity is
-u = v_x − R ω_y (MODEL.md §2: ΔV = V − R ω × n). Chung & Ooi (and Kratos) count the spin of a
+u = v_x − R ω_y (MODEL §2: ΔV = V − R ω × n). Chung & Ooi (and Kratos) count the spin of a
 forward-rolling sphere as *negative* (VALIDATION.md CO4, CO5), so a source value ω′ is compared
 with −ω_y.
 
@@ -64,7 +64,7 @@ CO4_DEM_MIN_ANGLE_DEG = 35.0
 
 # ---- helpers -----------------------------------------------------------------------------
 
-#: Moment of inertia factor of a solid sphere (MODEL.md §4.3, k = I/(m R²)).
+#: Moment of inertia factor of a solid sphere (MODEL §4.3, k = I/(m R²)).
 K_SOLID = 0.4
 #: Exact Hertz contact-duration coefficient: t_c = C (m*²/(R* E*² v0))^(1/5) with
 #: C = 2 (15/16)^(2/5) ∫0^1 (1 − x^(5/2))^(−1/2) dx and the integral = (2/5) B(2/5, 1/2).
@@ -176,7 +176,7 @@ HERTZ_EFFECTS = {
 
 
 def hertz_effective(case: str) -> tuple[float, float, float, float]:
-    """(E*, R*, m*, v0) of a Hertz case from the material constants (MODEL.md §2)."""
+    """(E*, R*, m*, v0) of a Hertz case from the material constants (MODEL §2)."""
     mat, radius, speed, pair = HERTZ_CASES[case]
     compliance = (1.0 - mat.poisson_ratio**2) / mat.youngs_modulus
     m = sphere_mass(mat, radius)
@@ -186,7 +186,7 @@ def hertz_effective(case: str) -> tuple[float, float, float, float]:
 
 
 def hertz_closed_form(case: str) -> dict[str, float]:
-    """MODEL.md §3.1 maxima and the exact Hertz contact duration, SI units."""
+    """MODEL §3.1 maxima and the exact Hertz contact duration, SI units."""
     e_star, r_star, m_star, v0 = hertz_effective(case)
     d = (15.0 * m_star * v0**2 / (16.0 * e_star * math.sqrt(r_star))) ** 0.4
     return {
@@ -251,12 +251,12 @@ def test_co1_co2_elastic_maxima_match_derived_table(case, effects_name):
 @pytest.mark.parametrize("effects_name", list(HERTZ_EFFECTS))
 @pytest.mark.parametrize("case", list(HERTZ_CASES))
 def test_co1_co2_elastic_maxima_match_closed_form(case, effects_name):
-    """δ_max, F_max, a_max equal the MODEL.md §3.1 closed forms to round-off (VALIDATION: 1e-9)."""
+    """δ_max, F_max, a_max equal the MODEL §3.1 closed forms to round-off (VALIDATION: 1e-9)."""
     res = hertz_impact(case, HERTZ_EFFECTS[effects_name])
     want = hertz_closed_form(case)
     for field in ("delta_max", "force_max", "contact_radius_max"):
         assert math.isclose(getattr(res, field), want[field], rel_tol=CLOSED_FORM_RTOL), field
-    # J_n = (1 + e_n) m* v0 = 2 m* v0 for an elastic impact (MODEL.md §3.6).
+    # J_n = (1 + e_n) m* v0 = 2 m* v0 for an elastic impact (MODEL §3.6).
     _, _, m_star, v0 = hertz_effective(case)
     assert math.isclose(res.normal_impulse, 2.0 * m_star * v0, rel_tol=ROUNDOFF_RTOL)
 
@@ -383,7 +383,7 @@ CO3_E_N = [round(0.1 * k, 1) for k in range(11)]  #: prescribed e_n, 0 … 1
 @pytest.mark.parametrize("e_n", CO3_E_N)
 @pytest.mark.parametrize("material", ["alumina", "cast_iron"])
 def test_co3_prescribed_restitution(material, e_n):
-    """Rebound/impact speed = prescribed e_n (1e-12) and J_n = (1 + e_n) m v0 (MODEL.md §3.9)."""
+    """Rebound/impact speed = prescribed e_n (1e-12) and J_n = (1 + e_n) m v0 (MODEL §3.9)."""
     mat = BUILTIN_MATERIALS[material]  # E, ν, ρ as in Chung & Ooi test 3
     res = sphere_wall_impact(mat, RIGID, CO3_RADIUS, (0.0, 0.0, -CO3_SPEED),
                              contact=Contact(sliding_friction=0.0, restitution=e_n),
@@ -413,12 +413,12 @@ CO4_CONTACT = Contact(sliding_friction=CO4_MU, restitution=CO4_E_N)
 #: DEM series → sphere material (built-ins carry the Chung & Ooi test 4 E, ν, ρ). With e_n
 #: prescribed, the rigid-body results do not depend on the material; both are run anyway.
 CO4_SERIES = {"DEM_Al_oxide": "alumina", "DEM_Al_alloy": "aluminium_alloy"}
-#: Critical angle tan θ_c = (1 + 1/k) μ (1 + e_n) (MODEL.md §4.3): 32.52°.
+#: Critical angle tan θ_c = (1 + 1/k) μ (1 + e_n) (MODEL §4.3): 32.52°.
 CO4_THETA_C = math.degrees(math.atan((1.0 + 1.0 / K_SOLID) * CO4_MU * (1.0 + CO4_E_N)))
 
 
 def co4_closed_form(theta_deg: float) -> dict[str, float]:
-    """MODEL.md §4.3 sphere–wall closed forms, no initial spin.
+    """MODEL §4.3 sphere–wall closed forms, no initial spin.
 
     Returns e_t, the spin ω′ in hsgran's sign (positive = forward rolling), the centre and
     contact-patch rebound angles [deg], and the contact-point slip after [m/s].
@@ -476,7 +476,7 @@ CO4_ANGLES = [*range(5, 90, 5), 32.0, 33.0, 35.03, 89.0]
 @pytest.mark.parametrize("theta", CO4_ANGLES)
 @pytest.mark.parametrize("material", list(CO4_SERIES.values()))
 def test_co4_closed_forms(material, theta):
-    """e_t, ω′, both rebound angles and the regime equal MODEL.md §4.3 at every angle (1e-9)."""
+    """e_t, ω′, both rebound angles and the regime equal MODEL §4.3 at every angle (1e-9)."""
     got = co4_model(material, theta)
     want = co4_closed_form(theta)
     assert got["regime"] == ("sliding" if theta > CO4_THETA_C else "rolling")
@@ -597,7 +597,7 @@ def test_co4_sticking_range_recorded(series_name, record_property):
 CO5_NORMAL_SPEED = 5.0  #: [m/s]
 CO5_MU = 0.3
 CO5_E_N = 1.0  #: elastic spheres: σ_y = ∞ materials below give e_n = 1 from the Hertz law
-#: Ψ1 above which the sphere slides throughout: 3.5 (1 + e_n) = 7 (MODEL.md §4.2).
+#: Ψ1 above which the sphere slides throughout: 3.5 (1 + e_n) = 7 (MODEL §4.2).
 CO5_PSI1_CRIT = 3.5 * (1.0 + CO5_E_N)
 #: Sphere choices. The normalised outcome is independent of them: J_n = (1 + e_n) m v_n and
 #: J_t ≤ μ J_n both scale with m, so Δv_t = J_t/m and R Δω = R² J_t/I = J_t/(k m) do not depend
@@ -607,7 +607,7 @@ CO5_SPHERES = {"alumina_2.5mm": ("alumina", 2.5e-3), "cast_iron_10um": ("cast_ir
 
 
 def co5_closed_form(psi1: float) -> tuple[float, float]:
-    """(Ψ2, Rω′/(μ v_n) in the source's sign) from MODEL.md §4.3 / VALIDATION.md CO5."""
+    """(Ψ2, Rω′/(μ v_n) in the source's sign) from MODEL §4.3 / VALIDATION.md CO5."""
     if psi1 > CO5_PSI1_CRIT:
         return (psi1 - CO5_PSI1_CRIT) / CO5_E_N, -2.5 * (1.0 + CO5_E_N)
     return 0.0, -5.0 / 7.0 * psi1
@@ -707,7 +707,7 @@ CO6_NORMAL_SPEED = 0.2  #: [m/s]
 CO6_MU = 0.4
 CO6_E_N = 0.5
 CO6_CONTACT = Contact(sliding_friction=CO6_MU, restitution=CO6_E_N)
-#: 3.5 μ (1 + e_n) = 2.1: the sliding/rolling boundary in tan(incidence) (MODEL.md §4.3).
+#: 3.5 μ (1 + e_n) = 2.1: the sliding/rolling boundary in tan(incidence) (MODEL §4.3).
 CO6_T_CRIT = 3.5 * CO6_MU * (1.0 + CO6_E_N)
 CO6_SERIES = ("DEM_Al_alloy", "DEM_nylon")
 
@@ -742,7 +742,7 @@ def u0_from_t(t: float) -> float:
 
 
 def co6_beta(x: float) -> float:
-    """β = x − 1 in sliding (x < 1), 0 in rolling (MODEL.md §4.3)."""
+    """β = x − 1 in sliding (x < 1), 0 in rolling (MODEL §4.3)."""
     return x - 1.0 if x < 1.0 else 0.0
 
 
@@ -855,7 +855,7 @@ def co7_impact(material: Material, omega1, omega2):
 def test_co7_opposite_spins_leave_spins_unchanged(material_name):
     """No friction impulse: spins unchanged and no tangential velocity, exactly (reference file).
 
-    Sign: the tangential contact-point velocity is −(R1 ω1 + R2 ω2) × n (MODEL.md §2). With
+    Sign: the tangential contact-point velocity is −(R1 ω1 + R2 ω2) × n (MODEL §2). With
     R1 = R2 it vanishes iff ω1 + ω2 is parallel to n, i.e. for spin *vectors* ω2 = −ω1 about a
     common axis ⊥ n: ω1 = +ω ŷ, ω2 = −ω ŷ. Check: sphere 1's contact point at −R ẑ moves with
     ω ŷ × (−R ẑ) = −ωR x̂; sphere 2's at +R ẑ with (−ω ŷ) × (R ẑ) = −ωR x̂ — the same, so the

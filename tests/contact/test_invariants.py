@@ -1,4 +1,4 @@
-"""Invariants and test oracles of the collision model: MODEL.md §7, items 1–18.
+"""Invariants and test oracles of the collision model: MODEL §7, items 1–18.
 
 Each test is named after the claim it checks and cites its item of §7 (and the section of
 MODEL.md the claim comes from). Properties that hold for every input are checked with
@@ -283,7 +283,7 @@ def mass_inertia(case: Case):
 
 
 def effective(case: Case):
-    """(m*, R*, m_t*) of MODEL.md §2."""
+    """(m*, R*, m_t*) of MODEL §2."""
     m1, i1, m2, i2 = mass_inertia(case)
     r2 = 0.0 if case.wall else case.r2
     m_eff = 1.0 / (1.0 / m1 + 1.0 / m2)
@@ -305,7 +305,7 @@ def uses_spin(case: Case) -> bool:
 
 
 def contact_velocity(case: Case, v1, w1, v2, w2) -> np.ndarray:
-    """ΔV = (V1 − V2) − (R1 ω1 + R2 ω2) × n (MODEL.md §2); spins count only with rotation."""
+    """ΔV = (V1 − V2) − (R1 ω1 + R2 ω2) × n (MODEL §2); spins count only with rotation."""
     dv = np.asarray(v1) - np.asarray(v2)
     if uses_spin(case):
         r2 = 0.0 if case.wall else case.r2
@@ -508,7 +508,7 @@ def test_plastic_scaling_exponent(sphere, wall):
 # ---- 6. energy closure --------------------------------------------------------------------------
 
 def spec_force(delta, e_star, r_eff, sigma, c=1.6, kappa=2.8, rho_p=110.0):
-    """F(δ) of MODEL.md §3.1, §3.3, §3.4, written out from the spec (not from the package)."""
+    """F(δ) of MODEL §3.1, §3.3, §3.4, written out from the spec (not from the package)."""
     if not math.isfinite(sigma):
         return (4.0 / 3.0) * e_star * math.sqrt(r_eff) * delta**1.5
     d_y = r_eff * (math.pi * c * sigma / (2.0 * e_star)) ** 2
@@ -659,7 +659,7 @@ def test_capture_sets_normal_velocity_to_zero(case):
 
 
 def capture_closed_form(f0, r_eff, e_star, m_eff):
-    """Elastic-regime capture speed of MODEL.md §3.8."""
+    """Elastic-regime capture speed of MODEL §3.8."""
     inner = ((8.0 * math.pi / 3.0) * f0 * math.sqrt(r_eff)
              * (15.0 / (16.0 * e_star * math.sqrt(r_eff))) ** 0.6 * m_eff**-0.4)
     return inner**1.25

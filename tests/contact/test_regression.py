@@ -1,4 +1,4 @@
-"""Regression anchors of MODEL.md §7.1 (computed by two independent implementations of the
+"""Regression anchors of MODEL §7.1 (computed by two independent implementations of the
 spec with the §8 defaults; not measurements).
 
 Tolerance: the anchors are printed to a fixed number of significant figures, so each value is
@@ -46,7 +46,7 @@ MICRO_RADIUS = 2.45e-6  # m
 MICRO_CONTACT = Contact(work_of_adhesion=0.2)
 PLASTICITY_ADHESION = Effects.parse(["plasticity", "adhesion"])
 
-#: MODEL.md §7.1: v0 [m/s], stage, e_n, δ_max [m], F_max [N], a_max [m].
+#: MODEL §7.1: v0 [m/s], stage, e_n, δ_max [m], F_max [N], a_max [m].
 STEEL_TABLE = (
     (0.1, "elastic", 1.0000, 1.893e-6, 26.97, 9.728e-5),
     (0.5, "elastic-plastic", 0.8653, 7.205e-6, 163.0, 1.898e-4),
@@ -58,7 +58,7 @@ STEEL_TABLE = (
     (100.0, "fully-plastic", 0.3315, 9.665e-4, 4.251e4, 2.198e-3),
 )
 
-#: MODEL.md §7.1 adhesive micro-sphere: v0 [m/s] → e_n.
+#: MODEL §7.1 adhesive micro-sphere: v0 [m/s] → e_n.
 MICRO_RESTITUTION = ((2.0, 0.400), (5.0, 0.498), (10.0, 0.493), (20.0, 0.465))
 
 

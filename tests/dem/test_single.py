@@ -13,7 +13,7 @@ from hsgran.impact import oblique_velocity, sphere_wall_impact
 from hsgran.materials import BUILTIN_MATERIALS, Contact, Material, pair_row
 
 STEEL = BUILTIN_MATERIALS["steel"]
-RADIUS = 5e-3  # the MODEL.md §7.1 regression sphere
+RADIUS = 5e-3  # the MODEL §7.1 regression sphere
 FRICTION = Effects.parse(["rotation", "friction"])
 STAGED = Effects.parse(["rotation", "friction", "plasticity"])
 PLASTIC = Effects.parse(["plasticity"])
@@ -106,7 +106,7 @@ def test_coulomb_friction_sticking_and_sliding_limits():
 
 
 def test_adhesive_capture_speed_matches_the_impulse_model():
-    """MODEL.md §7.1: ammonium fluorescein on silicon is captured below 1.157 m/s."""
+    """MODEL §7.1: ammonium fluorescein on silicon is captured below 1.157 m/s."""
     af, si = BUILTIN_MATERIALS["ammonium_fluorescein"], BUILTIN_MATERIALS["silicon"]
     eff = Effects.parse(["plasticity", "adhesion"])
     contact = Contact(work_of_adhesion=0.2)
