@@ -36,12 +36,14 @@ from hsgran._flight import (
     MAX_ZERO_TIME_EVENTS,
     START_GAP_REL,
     advance,
+    approaching,
     enter_plane,
     min_image,
     note_progress,
     plane_gap,
     pressed,
     state_at,
+    tc_row,
 )
 from hsgran._jit import njit, prefetch
 from hsgran._predict import predict, predict_fn, prefetch_cells, repredict_later
@@ -62,9 +64,11 @@ from hsgran._state import (
     F_T_CUR,
     F_T_END,
     F_TC_TIME,
+    FL_ADHESION,
     FL_FRICTION,
     FL_GRAVITY,
     FL_LOG,
+    FL_PLASTICITY,
     FL_ROLLING,
     FL_ROTATION,
     I_COLLAPSED,
@@ -78,6 +82,7 @@ from hsgran._state import (
     I_SEQ,
     S_R,
     S_T,
+    S_V,
 )
 from hsgran.contact.model import (
     REC_E_N,
@@ -86,6 +91,7 @@ from hsgran.contact.model import (
     REC_J_T,
     REC_REGIME,
     REC_STAGE,
+    resolve,
 )
 from hsgran.events.calendar import (
     calendar_build,
@@ -319,9 +325,22 @@ def _on_pair(i, j, t, flight, dyn, walls, space, grid, sched, out, pair_table, f
                 if full:
                     return STATUS_LOG_FULL
             return GO_ON
-    hit, tc_on, wedged_a, wedged_b = collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn,
-                                                  walls, space, grid, sched, isc, pair_table,
-                                                  fsc, rec, counts, flags, grav_on)
+        hit, tc_on, wedged_a, wedged_b = collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight,
+                                                      dyn, walls, space, grid, sched, isc,
+                                                      pair_table, fsc, rec, counts, flags)
+    else:
+        wedged_a = wedged_b = -1
+        ri = st[i, S_R]
+        rj = st[j, S_R]
+        row, tc_on = tc_row(pair_table[dyn.mat[i], dyn.mat[j]], t, t_last[i], t_last[j], fsc,
+                            dyn.row_tc)
+        hit = False
+        if approaching(i, j, dx, dy, dz, ri + rj, st):
+            hit = resolve(st[i, S_V:S_V + 3], omg[i] if rotation else omg[0],
+                          st[j, S_V:S_V + 3], omg[j] if rotation else omg[0], nx, ny, nz,
+                          dyn.inv_m[i], dyn.inv_m[j], dyn.inv_i[i], dyn.inv_i[j], ri, rj,
+                          1.0 / ri + 1.0 / rj, row, rec, flags[FL_PLASTICITY], friction,
+                          rolling, flags[FL_ADHESION], rotation, False)
     if not hit:
         # re-check failed: a grazing contact that round-off turned into "separating" (or into
         # an approach below rounding, which the prediction ignores as well). Nothing changed,
@@ -365,8 +384,20 @@ def _on_wall(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc, counts,
                            END_NONE):
             return STATUS_LOG_FULL
         return GO_ON
-    hit, tc_on, landed, wedged = collide_wall(i, w, t, flight, dyn, walls, space.gravity,
-                                              pair_table, fsc, rec, flags, grav_on)
+    landed = wedged = False
+    if grav_on:
+        hit, tc_on, landed, wedged = collide_wall(i, w, t, flight, dyn, walls, space.gravity,
+                                                  pair_table, fsc, rec, flags)
+    else:
+        ri = st[i, S_R]
+        planes_n = walls.planes_n
+        row, tc_on = tc_row(pair_table[dyn.mat[i], walls.planes_mat[w]], t, t_last[i], -NEVER,
+                            fsc, dyn.row_tc)
+        hit = resolve(st[i, S_V:S_V + 3], omg[i] if rotation else omg[0], walls.planes_vel[w],
+                      walls.planes_omg[w], planes_n[w, 0], planes_n[w, 1], planes_n[w, 2],
+                      dyn.inv_m[i], 0.0, dyn.inv_i[i], 0.0, ri, 0.0, 1.0 / ri, row, rec,
+                      flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING],
+                      flags[FL_ADHESION], rotation, False)
     if not hit:
         # re-check failed (see _on_pair)
         repredict_later(isc, i)

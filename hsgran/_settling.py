@@ -2,19 +2,18 @@
 rest (layer 5; compiled kernels used by :mod:`hsgran._loop`). All of them are hsgran's own
 choices [OURS]; what each costs in accuracy is in docs/enduring-contact.md.
 
-The event loop reaches them through four entry points (the loop compiled without gravity
-runs none of the rules):
+The event loop reaches them through four entry points, with gravity only (the loop compiled
+without gravity runs none of the rules):
 
 - :func:`settle` — a slow meeting of two spheres ends in rest instead of a collision: a sphere
   lands on a plane it lies on, falls asleep on a sphere at rest, or two slow spheres on their
   supports both stop;
 - :func:`collide_pair` — a sphere–sphere collision with supports: backing by a plane or by the
   sphere a sleeper rests on, hops of pressed pairs, resting spheres held where they are, waking
-  the sleepers of a sphere set moving, and stopping a sphere wedged between immovable bodies
-  (without gravity: the plain collision, so that the contact model has one call site);
+  the sleepers of a sphere set moving, and stopping a sphere wedged between immovable bodies;
 - :func:`lands_before_wall` — a sphere meeting a plane too slowly to bounce stays on it;
 - :func:`collide_wall` — a sphere–plane collision with backing by another plane, landing after
-  a slow rebound and the wedge stop (without gravity: the plain collision).
+  a slow rebound and the wedge stop.
 
 The next step for dense scenes (a multi-contact treatment in place of these pairwise rules)
 replaces this module behind the same entry points.
@@ -473,20 +472,22 @@ def _hold(held, c, inv_m, inv_i):
     return c, inv_m, inv_i
 
 
-@njit(inline="always")
+# The two collisions under gravity are compiled functions of their own, not inlined into the
+# loop: numba's inliner re-processes an inlined body at every level it passes through, and
+# with the contact model inside them that tripled the loop's compile time
+# (docs/performance.md). A call costs the copy of its arguments, which the settling scenes do
+# not measurably feel; the loop without gravity has the plain collision inlined.
+@njit
 def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, grid, sched, isc,
-                 pair_table, fsc, rec, counts, flags, grav_on):
+                 pair_table, fsc, rec, counts, flags):
     """Collide touching spheres i, j (unit normal n from j to i, r = x_i − x_j = (dx, dy, dz)
-    [m]) with the contact model (hsgran.contact.model.resolve, MODEL §6), if they still
-    approach. With gravity (``grav_on``, a compile-time constant) the enduring-contact rules
-    [OURS, docs/enduring-contact.md] wrap it: a
+    [m]) under gravity, with the enduring-contact rules [OURS, docs/enduring-contact.md]: a
     sphere pressed into its support (a plane, or a sphere it sleeps on) is backed by it; a
     pair pressed together and meeting slowly hops (:func:`_hop`); a resting sphere met slowly
     is held where it is; a sleeper the collision leaves asleep is treated as immovable; after
     it, backed spheres stay on their planes, sleepers of a sphere set moving fall, and a
     sphere wedged in a zero-time sequence against an immovable body is stopped
-    (:func:`_wedge_stop`). Without gravity it is the plain collision. (One call site of the
-    contact model, which is inlined, for both: a second one would double its compile time.)
+    (:func:`_wedge_stop`).
 
     Returns:
         (hit, tc_on, wedged_a, wedged_b): whether the collision was executed (False: the
@@ -501,22 +502,19 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
     gravity, box_len, periodic = space
     planes_n = walls.planes_n
     wedged_a = wedged_b = -1
-    rest_i = grav_on and mstate[i] == MS_REST
-    rest_j = grav_on and mstate[j] == MS_REST
+    rest_i = mstate[i] == MS_REST
+    rest_j = mstate[j] == MS_REST
     wi = omg[i] if rotation else omg[0]
     wj = omg[j] if rotation else omg[0]
     ri = st[i, S_R]
     rj = st[j, S_R]
-    ci = cj = 0.0
-    bix = biy = biz = bjx = bjy = bjz = 0.0
-    if grav_on:
-        # a sphere on a plane that the impulse presses into the plane is backed by it
-        bix, biy, biz = _support_normal(i, st, mstate, mplane, planes_n, box_len, periodic)
-        bjx, bjy, bjz = _support_normal(j, st, mstate, mplane, planes_n, box_len, periodic)
-        ci = _support_cos(nx, ny, nz, bix, biy, biz)
-        cj = _support_cos(-nx, -ny, -nz, bjx, bjy, bjz)
-        if ci * ci + cj * cj >= 2.0 - SUPPORT_EPS:
-            ci = cj = 0.0  # pressed into two facing planes at once: no rigid limit
+    # a sphere on a plane that the impulse presses into the plane is backed by it
+    bix, biy, biz = _support_normal(i, st, mstate, mplane, planes_n, box_len, periodic)
+    bjx, bjy, bjz = _support_normal(j, st, mstate, mplane, planes_n, box_len, periodic)
+    ci = _support_cos(nx, ny, nz, bix, biy, biz)
+    cj = _support_cos(-nx, -ny, -nz, bjx, bjy, bjz)
+    if ci * ci + cj * cj >= 2.0 - SUPPORT_EPS:
+        ci = cj = 0.0  # pressed into two facing planes at once: no rigid limit
     vi0x, vi0y, vi0z = st[i, 3], st[i, 4], st[i, 5]
     vj0x, vj0y, vj0z = st[j, 3], st[j, 4], st[j, 5]
     wi0x, wi0y, wi0z = wi[0], wi[1], wi[2]
@@ -526,27 +524,25 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
     inv_ii, inv_ij = inv_i[i], inv_i[j]
     row, tc_on = tc_row(pair_table[mat[i], mat[j]], t, dyn.t_last[i], dyn.t_last[j], fsc,
                         dyn.row_tc)
-    hit = False
-    held_i = held_j = False
-    if grav_on:
-        # pressed together by their accelerations and meeting slower than a hop: a hop
-        # instead of a collision (see _hop); a sphere at rest is held where it is
-        held_i = mstate[i] == MS_REST
-        held_j = mstate[j] == MS_REST
-        hit = _hop(i, j, nx, ny, nz, 0.0 if held_i else inv_mi, 0.0 if held_j else inv_mj, st,
-                   flight.acc, rec, fsc[F_TC_TIME])
-        if hit:
-            counts[EV_HOP] += 1
-            tc_on = False
-        else:
-            # a sphere at rest met slower than the landing speed is held where it is: such a
-            # touch cannot move it in a pile [OURS]; knocked off, it would stop again at once
-            # and be knocked off again (a zero-time sequence)
-            held_i = _slow_touch_at_rest(i, j, nx, ny, nz, st, mstate, fsc[F_LANDING_SPEED])
-            held_j = _slow_touch_at_rest(j, i, -nx, -ny, -nz, st, mstate,
-                                         fsc[F_LANDING_SPEED])
-            if held_i and held_j:
-                held_i = held_j = False  # two resting spheres never approach each other
+    # pressed together by their accelerations and meeting slower than a hop: a hop instead of
+    # a collision (see _hop); a sphere at rest is held where it is
+    held_i = mstate[i] == MS_REST
+    held_j = mstate[j] == MS_REST
+    hit = _hop(i, j, nx, ny, nz, 0.0 if held_i else inv_mi, 0.0 if held_j else inv_mj, st,
+               flight.acc, rec, fsc[F_TC_TIME])
+    if hit:
+        counts[EV_HOP] += 1
+        tc_on = False
+        ci, inv_mi, inv_ii = _hold(held_i, ci, inv_mi, inv_ii)
+        cj, inv_mj, inv_ij = _hold(held_j, cj, inv_mj, inv_ij)
+    else:
+        # a sphere at rest met slower than the landing speed is held where it is: such a touch
+        # cannot move it in a pile [OURS]; knocked off, it would stop again at once and be
+        # knocked off again (a zero-time sequence)
+        held_i = _slow_touch_at_rest(i, j, nx, ny, nz, st, mstate, fsc[F_LANDING_SPEED])
+        held_j = _slow_touch_at_rest(j, i, -nx, -ny, -nz, st, mstate, fsc[F_LANDING_SPEED])
+        if held_i and held_j:
+            held_i = held_j = False  # two resting spheres never approach each other
         ci, inv_mi, inv_ii = _hold(held_i, ci, inv_mi, inv_ii)
         cj, inv_mj, inv_ij = _hold(held_j, cj, inv_mj, inv_ij)
     hopped = hit
@@ -569,7 +565,7 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
                 _backed_velocity(i, vi0x, vi0y, vi0z, jx, jy, jz, bix, biy, biz, st, inv_m)
             if cj > 0.0:
                 _backed_velocity(j, vj0x, vj0y, vj0z, -jx, -jy, -jz, bjx, bjy, bjz, st, inv_m)
-        if not grav_on or not hit or hopped or held_i or held_j or attempt > 0:
+        if not hit or hopped or held_i or held_j or attempt > 0:
             break
         # A sleeper that the collision leaves asleep (see _after_backed) has not moved: the
         # collision was with an immovable body, so it is redone as one [OURS]. Otherwise a
@@ -588,8 +584,8 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
         ci, inv_mi, inv_ii = _hold(held_i, ci, inv_mi, inv_ii)
         cj, inv_mj, inv_ij = _hold(held_j, cj, inv_mj, inv_ij)
         hit = False
-    if not hit or not grav_on:
-        return hit, tc_on, wedged_a, wedged_b
+    if not hit:
+        return False, tc_on, wedged_a, wedged_b
     # a backed sphere stays on its plane (a new segment from its new velocity and spin); one
     # pulled off it, or asleep on a sphere, flies
     if not held_i:
@@ -635,14 +631,12 @@ def lands_before_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, fla
     return True
 
 
-@njit(inline="always")
-def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, flags, grav_on):
-    """Collide sphere i with plane w with the contact model, if it still approaches. With
-    gravity (``grav_on``, a compile-time constant) the enduring-contact rules [OURS] wrap it:
-    a sphere on another plane is backed by it (a sphere sliding into a side wall), one knocked
-    off its plane flies, one whose rebound is slower than the landing speed lands, and a sphere
-    wedged in a zero-time sequence is stopped (planes never move: immovable). Without gravity
-    it is the plain collision (one inlined call site of the contact model for both).
+@njit
+def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, flags):
+    """Collide sphere i with plane w under gravity, with the enduring-contact rules [OURS]: a
+    sphere on another plane is backed by it (a sphere sliding into a side wall), one knocked
+    off its plane flies, one whose rebound is slower than the landing speed lands, and a
+    sphere wedged in a zero-time sequence is stopped (planes never move: immovable).
 
     Returns:
         (hit, tc_on, landed, wedged): whether the collision was executed (False: the re-check
@@ -658,7 +652,7 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     ri = st[i, S_R]
     ci = -1.0
     pw = -1
-    if grav_on and mstate[i] != MS_FLIGHT and mplane[i] >= 0:
+    if mstate[i] != MS_FLIGHT and mplane[i] >= 0:
         # on another plane (a sphere sliding into a side wall): backed by that plane as in the
         # pair case, unless the wall pulls it off (or squeezes it head-on)
         pw = mplane[i]
@@ -678,8 +672,8 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
         _backed_velocity(i, vi0x, vi0y, vi0z, (st[i, 3] - vi0x) / inv_mi,
                          (st[i, 4] - vi0y) / inv_mi, (st[i, 5] - vi0z) / inv_mi,
                          planes_n[pw, 0], planes_n[pw, 1], planes_n[pw, 2], st, inv_m)
-    if not hit or not grav_on:
-        return hit, tc_on, False, False
+    if not hit:
+        return False, tc_on, False, False
     landed = False
     if ci >= 0.0:
         enter_plane(i, np.int64(mplane[i]), t, no_end, flight, dyn, walls, gravity, pair_table,
