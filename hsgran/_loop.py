@@ -6,7 +6,7 @@ event calendar (:mod:`hsgran.events.calendar`) together with one extra entry, th
 frames evaluate every sphere's flight at the frame time without touching the stored states, so
 the output interval never changes the trajectory.
 
-Each turn of :func:`_run_loop`:
+Each turn of the loop (two of them, with gravity and without: :func:`_loop_of`):
 
 1. predict the spheres the last event changed (at most two, queued in ``isc[I_PEND_*]``) and
    move their calendar entries;
@@ -14,7 +14,8 @@ Each turn of :func:`_run_loop`:
 3. re-check: a pair event whose partner has had an event since it was predicted is stale, and
    only makes its owner re-predict;
 4. dispatch to the handler of the event's kind (hsgran.events.kinds): :func:`_on_frame`,
-   :func:`_on_pair`, :func:`_on_wall`, :func:`_on_state`, :func:`_on_cell`. A collision whose
+   ``on_pair`` and ``on_wall`` (:func:`_pair_handler`, :func:`_wall_handler`), :func:`_on_state`,
+   :func:`_on_cell`. A collision whose
    bodies no longer approach at the contact point (a grazing contact that round-off turned
    around) is a "miss": both re-predict. Every executed collision ends in
    :func:`_finish_collision` (counts, dissipated energy, collapse guard, event log).
@@ -285,134 +286,154 @@ def _finish_collision(kind, i, other, t, tc_on, landed, wedged_a, wedged_b, msta
     return EXECUTED
 
 
-@njit(inline="always")
-def _on_pair(i, j, t, flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
-             counts, rec, flags, grav_on):
-    """Collision of spheres i and j at time t [s] (their pair event is not stale)."""
-    friction, rolling = flags[FL_FRICTION], flags[FL_ROLLING]
-    rotation, log_on = flags[FL_ROTATION], flags[FL_LOG]
-    st, counter, acc, mstate = flight.st, flight.counter, flight.acc, flight.mstate
-    omg, zstreak, alpha, t_last, rapid = dyn.omg, dyn.zstreak, dyn.alpha, dyn.t_last, dyn.rapid
-    box_len, periodic = space.box_len, space.periodic
-    note_progress(i, t, st, zstreak)
-    note_progress(j, t, st, zstreak)
-    advance(st, acc, omg, alpha, i, t, grav_on, rotation)
-    advance(st, acc, omg, alpha, j, t, grav_on, rotation)
-    dx = min_image(st[i, 0] - st[j, 0], 0, box_len, periodic)
-    dy = min_image(st[i, 1] - st[j, 1], 1, box_len, periodic)
-    dz = min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
-    dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-    nx, ny, nz = dx / dist, dy / dist, dz / dist
-    if grav_on:
-        # a slow meeting that ends in rest instead of a collision (see _settling.settle)
-        rule, who, what = settle(i, j, nx, ny, nz, t, flight, dyn, walls, space.gravity,
-                                 pair_table, fsc, friction, rolling, rotation)
-        if rule != SETTLE_NONE:
-            # re-predictions in a fixed order (it sets the sequence numbers that break ties
-            # between simultaneous events): a sleeper first, else i
-            first = who if rule == SETTLE_SLEEP else i
-            repredict_later(isc, first)
-            repredict_later(isc, j if first == i else i)
-            counts[EV_LAND] += 1
-            if rule != SETTLE_SLEEP and _collapsed(isc, zstreak, i, j):
+def _pair_handler(grav_on):
+    """The pair-collision handler of the loop with gravity or without (``grav_on``, a constant
+    of the closure: numba drops the other branch of every ``if grav_on`` before it inlines
+    anything, so neither loop compiles the other's collision)."""
+
+    @njit(inline="always")
+    def on_pair(i, j, t, flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
+                counts, rec, flags):
+        """Collision of spheres i and j at time t [s] (their pair event is not stale)."""
+        friction, rolling = flags[FL_FRICTION], flags[FL_ROLLING]
+        rotation, log_on = flags[FL_ROTATION], flags[FL_LOG]
+        st, counter, acc, mstate = flight.st, flight.counter, flight.acc, flight.mstate
+        omg, zstreak, alpha, t_last, rapid = dyn.omg, dyn.zstreak, dyn.alpha, dyn.t_last, dyn.rapid
+        box_len, periodic = space.box_len, space.periodic
+        note_progress(i, t, st, zstreak)
+        note_progress(j, t, st, zstreak)
+        advance(st, acc, omg, alpha, i, t, grav_on, rotation)
+        advance(st, acc, omg, alpha, j, t, grav_on, rotation)
+        dx = min_image(st[i, 0] - st[j, 0], 0, box_len, periodic)
+        dy = min_image(st[i, 1] - st[j, 1], 1, box_len, periodic)
+        dz = min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
+        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        nx, ny, nz = dx / dist, dy / dist, dz / dist
+        if grav_on:
+            # a slow meeting that ends in rest instead of a collision (see _settling.settle)
+            rule, who, what = settle(i, j, nx, ny, nz, t, flight, dyn, walls, space.gravity,
+                                     pair_table, fsc, friction, rolling, rotation)
+            if rule != SETTLE_NONE:
+                # re-predictions in a fixed order (it sets the sequence numbers that break ties
+                # between simultaneous events): a sleeper first, else i
+                first = who if rule == SETTLE_SLEEP else i
+                repredict_later(isc, first)
+                repredict_later(isc, j if first == i else i)
+                counts[EV_LAND] += 1
+                if rule != SETTLE_SLEEP and _collapsed(isc, zstreak, i, j):
+                    return STATUS_COLLAPSE
+                if log_on:
+                    full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, who, what, mstate[who],
+                                END_NONE)
+                    if rule == SETTLE_STOP:  # both spheres stopped: an entry for each
+                        full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, what, who,
+                                    mstate[what], END_NONE) or full
+                    if full:
+                        return STATUS_LOG_FULL
+                return GO_ON
+            hit, tc_on, wedged_a, wedged_b = collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight,
+                                                          dyn, walls, space, grid, sched, isc,
+                                                          pair_table, fsc, rec, counts, flags)
+        else:
+            wedged_a = wedged_b = -1
+            ri = st[i, S_R]
+            rj = st[j, S_R]
+            row, tc_on = tc_row(pair_table[dyn.mat[i], dyn.mat[j]], t, t_last[i], t_last[j], fsc,
+                                dyn.row_tc)
+            hit = False
+            if approaching(i, j, dx, dy, dz, ri + rj, st):
+                hit = resolve(st[i, S_V:S_V + 3], omg[i] if rotation else omg[0],
+                              st[j, S_V:S_V + 3], omg[j] if rotation else omg[0], nx, ny, nz,
+                              dyn.inv_m[i], dyn.inv_m[j], dyn.inv_i[i], dyn.inv_i[j], ri, rj,
+                              1.0 / ri + 1.0 / rj, row, rec, flags[FL_PLASTICITY], friction,
+                              rolling, flags[FL_ADHESION], rotation, False)
+        if not hit:
+            # re-check failed: a grazing contact that round-off turned into "separating" (or into
+            # an approach below rounding, which the prediction ignores as well). Nothing changed,
+            # so no counter moves; both re-predict from the exact contact state, which no longer
+            # approaches. A loop of such retries is caught by the collapse guard.
+            repredict_later(isc, i)
+            repredict_later(isc, j)
+            counts[EV_MISS] += 1
+            if _collapsed(isc, zstreak, i, j):
                 return STATUS_COLLAPSE
-            if log_on:
-                full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, who, what, mstate[who],
-                            END_NONE)
-                if rule == SETTLE_STOP:  # both spheres stopped: an entry for each
-                    full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, what, who,
-                                mstate[what], END_NONE) or full
-                if full:
-                    return STATUS_LOG_FULL
             return GO_ON
-        hit, tc_on, wedged_a, wedged_b = collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight,
-                                                      dyn, walls, space, grid, sched, isc,
-                                                      pair_table, fsc, rec, counts, flags)
-    else:
-        wedged_a = wedged_b = -1
-        ri = st[i, S_R]
-        rj = st[j, S_R]
-        row, tc_on = tc_row(pair_table[dyn.mat[i], dyn.mat[j]], t, t_last[i], t_last[j], fsc,
-                            dyn.row_tc)
-        hit = False
-        if approaching(i, j, dx, dy, dz, ri + rj, st):
-            hit = resolve(st[i, S_V:S_V + 3], omg[i] if rotation else omg[0],
-                          st[j, S_V:S_V + 3], omg[j] if rotation else omg[0], nx, ny, nz,
-                          dyn.inv_m[i], dyn.inv_m[j], dyn.inv_i[i], dyn.inv_i[j], ri, rj,
-                          1.0 / ri + 1.0 / rj, row, rec, flags[FL_PLASTICITY], friction,
-                          rolling, flags[FL_ADHESION], rotation, False)
-    if not hit:
-        # re-check failed: a grazing contact that round-off turned into "separating" (or into
-        # an approach below rounding, which the prediction ignores as well). Nothing changed,
-        # so no counter moves; both re-predict from the exact contact state, which no longer
-        # approaches. A loop of such retries is caught by the collapse guard.
+        counter[i] += 1
+        counter[j] += 1
+        note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
+        note_rapid(j, t, t_last, rapid, fsc[F_TC_TIME])
+        t_last[i] = t_last[j] = t
         repredict_later(isc, i)
         repredict_later(isc, j)
-        counts[EV_MISS] += 1
-        if _collapsed(isc, zstreak, i, j):
-            return STATUS_COLLAPSE
-        return GO_ON
-    counter[i] += 1
-    counter[j] += 1
-    note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
-    note_rapid(j, t, t_last, rapid, fsc[F_TC_TIME])
-    t_last[i] = t_last[j] = t
-    repredict_later(isc, i)
-    repredict_later(isc, j)
-    return _finish_collision(EV_PAIR, i, j, t, tc_on, False, wedged_a, wedged_b, mstate,
-                             zstreak, out, fsc, isc, counts, rec, log_on)
+        return _finish_collision(EV_PAIR, i, j, t, tc_on, False, wedged_a, wedged_b, mstate,
+                                 zstreak, out, fsc, isc, counts, rec, log_on)
+
+    return on_pair
 
 
-@njit(inline="always")
-def _on_wall(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc, counts, rec, flags,
-             grav_on, ev_partner):
-    """Collision of sphere i with its event's plane at time t [s]."""
-    rotation, log_on = flags[FL_ROTATION], flags[FL_LOG]
-    st, counter, acc, mstate = flight.st, flight.counter, flight.acc, flight.mstate
-    omg, zstreak, alpha, t_last = dyn.omg, dyn.zstreak, dyn.alpha, dyn.t_last
-    w = np.int64(ev_partner[i])
-    note_progress(i, t, st, zstreak)
-    advance(st, acc, omg, alpha, i, t, grav_on, rotation)
-    if grav_on and lands_before_wall(i, w, t, flight, dyn, walls, space.gravity, pair_table,
-                                     fsc, flags):
+_on_pair_gravity = _pair_handler(True)
+_on_pair_free = _pair_handler(False)
+
+
+def _wall_handler(grav_on):
+    """The wall-collision handler of the loop with gravity or without (see _pair_handler)."""
+
+    @njit(inline="always")
+    def on_wall(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc, counts, rec, flags,
+                ev_partner):
+        """Collision of sphere i with its event's plane at time t [s]."""
+        rotation, log_on = flags[FL_ROTATION], flags[FL_LOG]
+        st, counter, acc, mstate = flight.st, flight.counter, flight.acc, flight.mstate
+        omg, zstreak, alpha, t_last = dyn.omg, dyn.zstreak, dyn.alpha, dyn.t_last
+        w = np.int64(ev_partner[i])
+        note_progress(i, t, st, zstreak)
+        advance(st, acc, omg, alpha, i, t, grav_on, rotation)
+        if grav_on and lands_before_wall(i, w, t, flight, dyn, walls, space.gravity, pair_table,
+                                         fsc, flags):
+            counter[i] += 1
+            repredict_later(isc, i)
+            counts[EV_LAND] += 1
+            if _collapsed(isc, zstreak, i, -1):
+                return STATUS_COLLAPSE
+            if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, -1 - w, mstate[i],
+                               END_NONE):
+                return STATUS_LOG_FULL
+            return GO_ON
+        landed = wedged = False
+        if grav_on:
+            hit, tc_on, landed, wedged = collide_wall(i, w, t, flight, dyn, walls, space.gravity,
+                                                      pair_table, fsc, rec, flags)
+        else:
+            ri = st[i, S_R]
+            planes_n = walls.planes_n
+            row, tc_on = tc_row(pair_table[dyn.mat[i], walls.planes_mat[w]], t, t_last[i], -NEVER,
+                                fsc, dyn.row_tc)
+            hit = resolve(st[i, S_V:S_V + 3], omg[i] if rotation else omg[0], walls.planes_vel[w],
+                          walls.planes_omg[w], planes_n[w, 0], planes_n[w, 1], planes_n[w, 2],
+                          dyn.inv_m[i], 0.0, dyn.inv_i[i], 0.0, ri, 0.0, 1.0 / ri, row, rec,
+                          flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING],
+                          flags[FL_ADHESION], rotation, False)
+        if not hit:
+            # re-check failed (see on_pair)
+            repredict_later(isc, i)
+            counts[EV_MISS] += 1
+            if _collapsed(isc, zstreak, i, -1):
+                return STATUS_COLLAPSE
+            return GO_ON
+        if landed:
+            counts[EV_LAND] += 1
         counter[i] += 1
+        note_rapid(i, t, t_last, dyn.rapid, fsc[F_TC_TIME])
+        t_last[i] = t
         repredict_later(isc, i)
-        counts[EV_LAND] += 1
-        if _collapsed(isc, zstreak, i, -1):
-            return STATUS_COLLAPSE
-        if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, -1 - w, mstate[i],
-                           END_NONE):
-            return STATUS_LOG_FULL
-        return GO_ON
-    landed = wedged = False
-    if grav_on:
-        hit, tc_on, landed, wedged = collide_wall(i, w, t, flight, dyn, walls, space.gravity,
-                                                  pair_table, fsc, rec, flags)
-    else:
-        ri = st[i, S_R]
-        planes_n = walls.planes_n
-        row, tc_on = tc_row(pair_table[dyn.mat[i], walls.planes_mat[w]], t, t_last[i], -NEVER,
-                            fsc, dyn.row_tc)
-        hit = resolve(st[i, S_V:S_V + 3], omg[i] if rotation else omg[0], walls.planes_vel[w],
-                      walls.planes_omg[w], planes_n[w, 0], planes_n[w, 1], planes_n[w, 2],
-                      dyn.inv_m[i], 0.0, dyn.inv_i[i], 0.0, ri, 0.0, 1.0 / ri, row, rec,
-                      flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING],
-                      flags[FL_ADHESION], rotation, False)
-    if not hit:
-        # re-check failed (see _on_pair)
-        repredict_later(isc, i)
-        counts[EV_MISS] += 1
-        if _collapsed(isc, zstreak, i, -1):
-            return STATUS_COLLAPSE
-        return GO_ON
-    if landed:
-        counts[EV_LAND] += 1
-    counter[i] += 1
-    note_rapid(i, t, t_last, dyn.rapid, fsc[F_TC_TIME])
-    t_last[i] = t
-    repredict_later(isc, i)
-    return _finish_collision(EV_WALL, i, -1 - w, t, tc_on, landed, i if wedged else -1, -1,
-                             mstate, zstreak, out, fsc, isc, counts, rec, log_on)
+        return _finish_collision(EV_WALL, i, -1 - w, t, tc_on, landed, i if wedged else -1, -1,
+                                 mstate, zstreak, out, fsc, isc, counts, rec, log_on)
+
+    return on_wall
+
+
+_on_wall_gravity = _wall_handler(True)
+_on_wall_free = _wall_handler(False)
 
 
 @njit(inline="always")
@@ -467,113 +488,113 @@ def _on_cell(i, flight, space, grid, isc, counts, ev_partner, large):
     return GO_ON
 
 
-@njit
-def _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
-              max_collisions, max_events, rec, flags, grav_on):
-    """Run events until t_end, a full buffer, ``max_collisions`` collisions or ``max_events``
-    events of any kind (this call); returns a ``STATUS_*`` code.
+def _loop_of(grav_on):
+    """The event loop with gravity or without (``grav_on``, a constant of the closure). Gravity is
+    a compile-time constant: the loop without it has no parabolas, motion states, settling rules
+    or collisions under gravity in it, and the loop with it has not the plain collisions
+    (numba prunes ``if grav_on`` before it inlines; docs/performance.md). The other effects are
+    run-time switches, so every scene uses one of these two compiled loops."""
 
-    ``grav_on`` (= ``flags[FL_GRAVITY]``) is a compile-time constant: see :func:`run_loop`. The
-    groups are those of :mod:`hsgran._state`.
-    """
-    st, counter, cell = flight.st, flight.counter, grid.cell
-    ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, cal = sched
-    n = st.shape[0]
-    t_end = fsc[F_T_END]
-    executed = 0
-    popped = 0
-    guess = -1  # the sphere likely to have the next event (_prefetch_next)
-    # Prefetch hints only for large systems, whose data do not fit the cache. The calendar
-    # has buckets exactly for them, and has_buckets is a constant of its type: for small
-    # systems the hints are not even compiled in.
-    large = has_buckets(cal)
-    while True:
-        if large and guess >= 0 and ev_kind[guess] == EV_PAIR:
-            # its record has arrived meanwhile: ask for its partner's too
-            prefetch(st, ev_partner[guess])
-            prefetch(ev_t, ev_partner[guess])
-        # predict both spheres first, then move their calendar entries: the places in the
-        # calendar that the moves touch are asked for (prefetched) meanwhile
-        pa = isc[I_PEND_A]
-        pb = isc[I_PEND_B]
-        for slot in range(I_PEND_A, I_PEND_B + 1):
-            p = isc[slot]
-            if p >= 0:
-                isc[slot] = -1
-                layer = isc[I_PEND_LAYER] if slot == I_PEND_A else -1
-                isc[I_PEND_LAYER] = -1
-                predict(p, fsc[F_T_CUR], flight, walls, space, grid, sched, isc, grav_on, layer)
-                if large:
-                    calendar_prefetch(cal, ev_t, p)
-        if pa >= 0:
-            calendar_update(cal, ev_t, ev_seq, pa)
-        if pb >= 0:
-            calendar_update(cal, ev_t, ev_seq, pb)
-        e, t = calendar_top(cal, ev_t, ev_seq)
-        if large:
-            guess = _prefetch_next(cal, ev_t, st, cell, n)
-        if t > t_end or t == NEVER:
-            # a frame due at t_end whose time k × frame_dt rounded above it is still taken
-            # (0.3 s is not 6 × 0.05 s in floating point)
-            if not (e == n and t - t_end <= ZERO_TIME_REL * max(1.0, t_end)):
-                return STATUS_DONE
-        fsc[F_T_CUR] = t
-        if e == n:
-            r = _on_frame(t, flight, dyn, sched, out, fsc, isc, counts, flags, grav_on)
-        else:
-            i = e
-            kind = ev_kind[i]
-            if kind == EV_PAIR:
-                j = np.int64(ev_partner[i])  # one integer type for sphere indices: one compile
-                if large:
-                    prefetch_cells(i, cell, grid.ncell, grid.head)
-                if counter[j] != ev_pcount[i]:
-                    # stale: the partner moved on since this was predicted; re-predict the owner
-                    repredict_later(isc, i)
-                    counts[EV_STALE] += 1
-                    r = GO_ON
-                else:
+    @njit
+    def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
+                 max_collisions, max_events, rec, flags):
+        """Run events until t_end, a full buffer, ``max_collisions`` collisions or ``max_events``
+        events of any kind (this call); returns a ``STATUS_*`` code.
+
+        The groups are those of :mod:`hsgran._state`.
+        """
+        st, counter, cell = flight.st, flight.counter, grid.cell
+        ev_t, ev_seq, ev_kind, ev_partner, ev_pcount, cal = sched
+        n = st.shape[0]
+        t_end = fsc[F_T_END]
+        executed = 0
+        popped = 0
+        guess = -1  # the sphere likely to have the next event (_prefetch_next)
+        # Prefetch hints only for large systems, whose data do not fit the cache. The calendar
+        # has buckets exactly for them, and has_buckets is a constant of its type: for small
+        # systems the hints are not even compiled in.
+        large = has_buckets(cal)
+        while True:
+            if large and guess >= 0 and ev_kind[guess] == EV_PAIR:
+                # its record has arrived meanwhile: ask for its partner's too
+                prefetch(st, ev_partner[guess])
+                prefetch(ev_t, ev_partner[guess])
+            # predict both spheres first, then move their calendar entries: the places in the
+            # calendar that the moves touch are asked for (prefetched) meanwhile
+            pa = isc[I_PEND_A]
+            pb = isc[I_PEND_B]
+            for slot in range(I_PEND_A, I_PEND_B + 1):
+                p = isc[slot]
+                if p >= 0:
+                    isc[slot] = -1
+                    layer = isc[I_PEND_LAYER] if slot == I_PEND_A else -1
+                    isc[I_PEND_LAYER] = -1
+                    predict(p, fsc[F_T_CUR], flight, walls, space, grid, sched, isc, grav_on, layer)
                     if large:
-                        prefetch_cells(j, cell, grid.ncell, grid.head)
-                    r = _on_pair(i, j, t, flight, dyn, walls, space, grid, sched, out,
-                                 pair_table, fsc, isc, counts, rec, flags, grav_on)
-            elif kind == EV_WALL:
-                r = _on_wall(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc, counts,
-                             rec, flags, grav_on, ev_partner)
-            elif grav_on and kind == EV_STATE:
-                r = _on_state(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc,
-                              counts, flags, grav_on, ev_partner)
-            else:  # EV_CELL (EV_NONE has time NEVER and is never popped)
-                r = _on_cell(i, flight, space, grid, isc, counts, ev_partner, large)
-        if r == EXECUTED:
-            executed += 1
-            if executed >= max_collisions:
+                        calendar_prefetch(cal, ev_t, p)
+            if pa >= 0:
+                calendar_update(cal, ev_t, ev_seq, pa)
+            if pb >= 0:
+                calendar_update(cal, ev_t, ev_seq, pb)
+            e, t = calendar_top(cal, ev_t, ev_seq)
+            if large:
+                guess = _prefetch_next(cal, ev_t, st, cell, n)
+            if t > t_end or t == NEVER:
+                # a frame due at t_end whose time k × frame_dt rounded above it is still taken
+                # (0.3 s is not 6 × 0.05 s in floating point)
+                if not (e == n and t - t_end <= ZERO_TIME_REL * max(1.0, t_end)):
+                    return STATUS_DONE
+            fsc[F_T_CUR] = t
+            if e == n:
+                r = _on_frame(t, flight, dyn, sched, out, fsc, isc, counts, flags, grav_on)
+            else:
+                i = e
+                kind = ev_kind[i]
+                if kind == EV_PAIR:
+                    j = np.int64(ev_partner[i])  # one integer type for sphere indices: one compile
+                    if large:
+                        prefetch_cells(i, cell, grid.ncell, grid.head)
+                    if counter[j] != ev_pcount[i]:
+                        # stale: the partner moved on since this was predicted; re-predict the owner
+                        repredict_later(isc, i)
+                        counts[EV_STALE] += 1
+                        r = GO_ON
+                    else:
+                        if large:
+                            prefetch_cells(j, cell, grid.ncell, grid.head)
+                        if grav_on:
+                            r = _on_pair_gravity(i, j, t, flight, dyn, walls, space, grid, sched,
+                                                 out, pair_table, fsc, isc, counts, rec, flags)
+                        else:
+                            r = _on_pair_free(i, j, t, flight, dyn, walls, space, grid, sched, out,
+                                              pair_table, fsc, isc, counts, rec, flags)
+                elif kind == EV_WALL:
+                    if grav_on:
+                        r = _on_wall_gravity(i, t, flight, dyn, walls, space, out, pair_table, fsc,
+                                             isc, counts, rec, flags, ev_partner)
+                    else:
+                        r = _on_wall_free(i, t, flight, dyn, walls, space, out, pair_table, fsc,
+                                          isc, counts, rec, flags, ev_partner)
+                elif grav_on and kind == EV_STATE:
+                    r = _on_state(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc,
+                                  counts, flags, grav_on, ev_partner)
+                else:  # EV_CELL (EV_NONE has time NEVER and is never popped)
+                    r = _on_cell(i, flight, space, grid, isc, counts, ev_partner, large)
+            if r == EXECUTED:
+                executed += 1
+                if executed >= max_collisions:
+                    return STATUS_BUDGET
+            elif r != GO_ON:
+                return r
+            popped += 1
+            if popped >= max_events:
                 return STATUS_BUDGET
-        elif r != GO_ON:
-            return r
-        popped += 1
-        if popped >= max_events:
-            return STATUS_BUDGET
+
+    return run_loop
 
 
-# Gravity is a compile-time constant of the loop: one compiled loop with it and one without, and
-# the second has no parabolas, motion states or resting rules in it (LLVM drops them; see
-# docs/performance.md). The other effects are run-time switches, so every scene uses one of
-# these two compiled loops.
-@njit
-def run_loop_gravity(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
-                     max_collisions, max_events, rec, flags):
-    """:func:`_run_loop` with gravity (``flags[FL_GRAVITY]`` set)."""
-    return _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
-                     max_collisions, max_events, rec, flags, True)
-
-
-@njit
-def run_loop_free(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
-                  max_collisions, max_events, rec, flags):
-    """:func:`_run_loop` without gravity: straight flights, no motion states."""
-    return _run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
-                     max_collisions, max_events, rec, flags, False)
+run_loop_gravity = _loop_of(True)
+run_loop_free = _loop_of(False)
 
 
 def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,

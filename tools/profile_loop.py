@@ -10,9 +10,10 @@ share of the samples in each compiled function of the loop. perf cannot name num
 code, so the child process writes where each function of the loop's compiled library was
 loaded (the names come from the object code in numba's cache, the addresses from its JIT
 engine) and the samples are assigned to those ranges here. Functions that numba inlines are
-part of ``_run_loop``. The debug build may keep a small function out of line that the
-ordinary build inlines (motion.flight_position showed 6.6 % of the pour's samples, and
-inlining it by hand changed nothing): check a lead with an A/B of the ordinary build.
+part of the loop (``_loop_of.<locals>.run_loop``). The debug build may keep a small function
+out of line that the ordinary build inlines (motion.flight_position showed 6.6 % of the pour's
+samples, and inlining it by hand changed nothing): check a lead with an A/B of the ordinary
+build.
 
 The loop is compiled with ``NUMBA_ENABLE_PROFILING=1`` (debug information) into its own cache
 directory (``--cache``, default /tmp/hsgran-profile-cache; a cold compile takes a minute or
@@ -74,7 +75,9 @@ def _library_symbols(cache: Path, loop: str) -> dict[str, int]:
     """{symbol: size [bytes]} of the functions in the cached object code of ``loop``
     (``run_loop_free`` or ``run_loop_gravity``), merged over its cached versions (layouts);
     the child reports where the version it loaded put them."""
-    entries = sorted(cache.glob(f"hsgran_*/_loop.{loop}-*.nbc"))
+    # both loops are closures of hsgran._loop._loop_of, cached under its name (every version of
+    # either is merged: a symbol the loaded version lacks is never sampled)
+    entries = sorted(cache.glob("hsgran_*/_loop._loop_of.locals.run_loop-*.nbc"))
     if not entries:
         raise SystemExit(f"no compiled {loop} in {cache}")
     import numba  # noqa: F401  (the cache entries unpickle into numba objects)
