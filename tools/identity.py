@@ -55,7 +55,8 @@ def _digest(*arrays) -> str:
 
 def run_scene(name: str) -> dict:
     """Final-state fingerprint of one scene: hashes of positions, velocities, spins, counts."""
-    sys.path.insert(0, str(ROOT / "tools"))
+    if str(ROOT / "tools") not in sys.path:  # bench_engine's lattice gas
+        sys.path.insert(0, str(ROOT / "tools"))
     from hsgran.engine import Simulation
     from hsgran.scene import load_scene
 
