@@ -44,7 +44,7 @@ from hsgran._state import FIELDS, Sizes, allocate, groups_of, stored_fields
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.calendar import calendar_build, new_calendar
-from hsgran.events.grid import cell_coordinates, insert, plan_grid, slot_of
+from hsgran.events.grid import cell_coordinates, insert_all, plan_grid
 from hsgran.materials import SOLID_SPHERE_INERTIA
 from hsgran.onplane import CONVENTION_A, CONVENTION_B
 
@@ -231,9 +231,7 @@ def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
     cell = a["cell"][:n]
     cell[:] = cell_coordinates(st[:, es.S_X:es.S_X + 3], a["origin"], a["csize"], a["ncell"],
                                a["periodic"])
-    for i in range(n):
-        insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], a["ncell"]), a["head"], a["nxt"],
-               a["prv"])
+    insert_all(cell, a["head"], a["nxt"], a["prv"], a["ncell"])
 
 
 class Simulation:
