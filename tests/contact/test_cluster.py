@@ -1,0 +1,212 @@
+"""The cluster solver (hsgran.contact.cluster) against closed forms: simultaneous impacts
+(Newton's cradle, a sphere on a plate hitting a wall) and resting contacts (a stack on a plate,
+a sphere on three spheres, a sphere in a V groove, rolling down a groove, a sphere in a
+corner)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hsgran.contact.cluster import solve
+
+#: Steel sphere of radius 1 mm: mass [kg] and moment of inertia [kg m²].
+R = 1e-3
+M = 7850.0 * 4.0 / 3.0 * math.pi * R**3
+I = 0.4 * M * R * R
+G = 9.81
+#: Relative accuracy asked of a converged solve (the solver stops at 1e-12 change per sweep;
+#: chains accumulate the residual over their length).
+TOL = 1e-9
+
+
+class Cluster:
+    """A cluster built contact by contact, for the solver's arrays."""
+
+    def __init__(self, nb, radius=R, mass=M, inertia=I):
+        self.inv_m = np.full(nb, 1.0 / mass)
+        self.inv_i = np.full(nb, 1.0 / inertia)
+        self.rad = np.full(nb, radius)
+        self.v = np.zeros((nb, 3))
+        self.w = np.zeros((nb, 3))
+        self.rows = []
+
+    def contact(self, a, b, n, target=0.0, mu=0.0, slip=(0.0, 0.0, 0.0), mur=0.0, vb=(0, 0, 0)):
+        n = np.asarray(n, float) / np.linalg.norm(n)
+        rb = self.rad[b] if b >= 0 else 0.0
+        reff = self.rad[a] * rb / (self.rad[a] + rb) if b >= 0 else self.rad[a]
+        self.rows.append((a, b, n, rb, np.asarray(vb, float), target, mu,
+                          np.asarray(slip, float), mur, reff))
+
+    def solve(self, rotation=True, friction=True, rolling=False):
+        nc = len(self.rows)
+        col = list(zip(*self.rows, strict=True))
+        self.pn = np.zeros(nc)
+        self.pt = np.zeros((nc, 3))
+        self.hr = np.zeros((nc, 3))
+        sweeps, worst = solve(nc, np.array(col[0], np.int64), np.array(col[1], np.int64),
+                              np.array(col[2]), np.array(col[3], float), np.array(col[4]),
+                              np.array(col[5], float), np.array(col[6], float),
+                              np.array(col[7]), np.array(col[8], float),
+                              np.array(col[9], float), np.zeros((nc, 3)), self.inv_m,
+                              self.inv_i, self.rad, self.v, self.w, self.pn, self.pt,
+                              self.hr, rotation, friction, rolling)
+        self.sweeps = sweeps
+        return worst
+
+
+@pytest.mark.parametrize("e", [0.0, 0.3, 0.8, 1.0])
+def test_newtons_cradle_of_five_takes_the_simultaneous_solution(e):
+    """Ball 0 hits a row of four touching balls at v: solved together with Newton's law at
+    each contact (docs/enduring-contact.md, "Clusters of contacts"), the row leaves at
+    v(1 + e)/5 and ball 0 at v(1 − 4e)/5, which conserves momentum and loses energy for e < 1
+    (none at e = 1)."""
+    v = 0.5
+    c = Cluster(5)
+    c.v[0, 0] = v
+    for k in range(4):  # contact k: a = ball k + 1, b = ball k, normal +x
+        c.contact(k + 1, k, (1.0, 0.0, 0.0), target=e * v if k == 0 else 0.0)
+    worst = c.solve()
+    assert worst <= TOL * v
+    np.testing.assert_allclose(c.v[1:, 0], v * (1 + e) / 5, rtol=TOL)
+    assert c.v[0, 0] == pytest.approx(v * (1 - 4 * e) / 5, abs=TOL * v)
+    assert c.v[:, 0].sum() == pytest.approx(v, rel=1e-12)
+    ke = 0.5 * M * (c.v**2).sum()
+    assert ke <= 0.5 * M * v * v * (1 + 1e-12)
+    if e == 1.0:
+        assert ke == pytest.approx(0.5 * M * v * v, rel=1e-9)
+
+
+def test_stack_on_a_plate_is_static_with_the_weights_above_each_contact():
+    """Three spheres stacked on a plate (force level, gravity −z): no acceleration, and each
+    contact carries the weight of the spheres above it."""
+    c = Cluster(3)
+    c.v[:, 2] = -G  # the "velocities" are accelerations: gravity
+    c.contact(0, -1, (0, 0, 1), mu=0.3)
+    c.contact(1, 0, (0, 0, 1), mu=0.3)
+    c.contact(2, 1, (0, 0, 1), mu=0.3)
+    worst = c.solve()
+    assert worst <= TOL * G
+    np.testing.assert_allclose(c.v, 0.0, atol=TOL * G)
+    np.testing.assert_allclose(c.pn, [3 * M * G, 2 * M * G, M * G], rtol=TOL)
+
+
+def _three_below(top_radius):
+    """Unit normals from three spheres of radius R (centres in a triangle, touching) to a
+    sphere of radius top_radius resting on them."""
+    s = 2 * R / math.sqrt(3)  # centre distance from the triangle's axis
+    h = math.sqrt((R + top_radius) ** 2 - s * s)
+    out = []
+    for k in range(3):
+        phi = 2 * math.pi * k / 3
+        d = np.array([-s * math.cos(phi), -s * math.sin(phi), h])
+        out.append(d / np.linalg.norm(d))
+    return out, h / (R + top_radius)
+
+
+def test_sphere_on_three_fixed_spheres_is_static():
+    """A sphere on three touching spheres held where they are: static, each normal force
+    m g / (3 cos θ) (θ: contact normal from the vertical), no friction needed."""
+    normals, cos_t = _three_below(R)
+    c = Cluster(1)
+    c.v[0, 2] = -G
+    for n in normals:
+        c.contact(0, -1, n, mu=0.0)
+    worst = c.solve(friction=False)
+    assert worst <= TOL * G
+    np.testing.assert_allclose(c.v, 0.0, atol=TOL * G)
+    np.testing.assert_allclose(c.pn, M * G / (3 * cos_t), rtol=TOL)
+
+
+@pytest.mark.parametrize(("mu", "static"), [(0.0, False), (0.5, True)])
+def test_sphere_on_three_spheres_on_a_plate_needs_friction_to_stand(mu, static):
+    """The same pyramid with the three lower spheres free on a plate: with friction (μ = 0.5
+    at every contact) it stands; without, the lower spheres are pushed apart and the top one
+    falls (downward acceleration)."""
+    normals, _ = _three_below(R)
+    c = Cluster(4)
+    c.v[:, 2] = -G
+    for k, n in enumerate(normals):
+        c.contact(3, k, n, mu=mu)
+        c.contact(k, -1, (0, 0, 1), mu=mu)
+    c.solve(friction=mu > 0)
+    if static:
+        np.testing.assert_allclose(c.v, 0.0, atol=1e-7 * G)
+        np.testing.assert_allclose(c.w, 0.0, atol=1e-7 * G / R)
+        top = sum(c.pn[2 * k] * normals[k][2] + c.pt[2 * k, 2] for k in range(3))
+        assert top == pytest.approx(M * G, rel=1e-7)  # the top sphere's weight
+        assert c.pn[1::2].sum() == pytest.approx(4 * M * G, rel=1e-7)  # all on the plate
+    else:
+        assert c.v[3, 2] < -0.1 * G
+        assert np.hypot(c.v[:3, 0], c.v[:3, 1]).min() > 0.01 * G
+
+
+@pytest.mark.parametrize("beta_deg", [20.0, 45.0, 70.0])
+def test_sphere_in_a_v_groove_is_static(beta_deg):
+    """A sphere in a horizontal V groove (plane normals at β from the vertical): static, each
+    normal force m g / (2 cos β)."""
+    b = math.radians(beta_deg)
+    c = Cluster(1)
+    c.v[0, 2] = -G
+    c.contact(0, -1, (0, math.sin(b), math.cos(b)))
+    c.contact(0, -1, (0, -math.sin(b), math.cos(b)))
+    worst = c.solve(friction=False)
+    assert worst <= TOL * G
+    np.testing.assert_allclose(c.v, 0.0, atol=TOL * G)
+    np.testing.assert_allclose(c.pn, M * G / (2 * math.cos(b)), rtol=TOL)
+
+
+@pytest.mark.parametrize(("beta_deg", "theta_deg"), [(30.0, 10.0), (45.0, 5.0), (60.0, 15.0)])
+def test_sphere_rolls_down_a_groove_at_the_closed_form_acceleration(beta_deg, theta_deg):
+    """A sphere at rest in a V groove tilted by θ along its axis (x) rolls on both planes
+    without slip: its rolling radius is R cos β, so a = g sin θ / (1 + (2/5)/cos² β), and
+    the spin's rate is a / (R cos β) about the axis across the groove."""
+    b = math.radians(beta_deg)
+    th = math.radians(theta_deg)
+    c = Cluster(1)
+    c.v[0] = (G * math.sin(th), 0.0, -G * math.cos(th))
+    c.contact(0, -1, (0, math.sin(b), math.cos(b)), mu=0.9)
+    c.contact(0, -1, (0, -math.sin(b), math.cos(b)), mu=0.9)
+    worst = c.solve()
+    assert worst <= TOL * G
+    a = G * math.sin(th) / (1 + 0.4 / math.cos(b) ** 2)
+    np.testing.assert_allclose(c.v[0], (a, 0.0, 0.0), atol=TOL * G)
+    np.testing.assert_allclose(c.w[0], (0.0, a / (R * math.cos(b)), 0.0), rtol=TOL,
+                               atol=TOL * G / R)
+    assert np.linalg.norm(c.pt, axis=1).max() <= 0.9 * c.pn.min()
+
+
+def test_sphere_slides_down_a_frictionless_slope_into_a_corner_and_rests_there():
+    """Impact: a sphere sliding down a slope (angle α) into a vertical wall at speed v stops
+    against both (e = 0; the two normals leave it no direction to go); force level: it then
+    rests in the corner, the slope carrying m g / cos α and the wall m g tan α."""
+    al = math.radians(25.0)
+    n_slope = np.array([math.sin(al), 0.0, math.cos(al)])  # slope falling towards +x
+    n_wall = np.array([-1.0, 0.0, 0.0])  # wall at the foot, facing −x
+    v = 0.2
+    c = Cluster(1)
+    c.v[0] = v * np.array([math.cos(al), 0.0, -math.sin(al)])  # down the slope
+    c.contact(0, -1, n_slope, target=0.0)
+    c.contact(0, -1, n_wall, target=0.0)
+    c.solve(friction=False)
+    np.testing.assert_allclose(c.v[0], 0.0, atol=TOL * v)
+    d = Cluster(1)
+    d.v[0, 2] = -G
+    d.contact(0, -1, n_slope)
+    d.contact(0, -1, n_wall)
+    d.solve(friction=False)
+    np.testing.assert_allclose(d.v[0], 0.0, atol=TOL * G)
+    np.testing.assert_allclose(d.pn, [M * G / math.cos(al), M * G * math.tan(al)], rtol=TOL)
+
+
+def test_sphere_on_a_plate_hitting_a_wall_rebounds_along_the_plate():
+    """A sphere lying on a plate meets a wall head-on at v with e: the plate takes nothing,
+    the sphere rebounds at e v along the plate."""
+    e, v = 0.6, 0.3
+    c = Cluster(1)
+    c.v[0, 0] = -v
+    c.contact(0, -1, (0, 0, 1), mu=0.3)
+    c.contact(0, -1, (1, 0, 0), target=e * v, mu=0.3)
+    c.solve()
+    np.testing.assert_allclose(c.v[0], (e * v, 0.0, 0.0), atol=TOL * v)
+    assert c.pn[0] == pytest.approx(0.0, abs=TOL * M * v)
