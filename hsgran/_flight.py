@@ -27,6 +27,13 @@ from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
 #: σ² for pairs; this one is a fraction of the radius for planes.
 PLANE_TOUCHING_REL = 1e-10
 
+#: Two bodies of a cluster of contacts (hsgran._cluster) touch when their gap is at most this
+#: fraction of their contact distance σ (of the radius, for a wall) [-]: far above the rounding
+#: of positions (1e-14 σ) and above how far a segment of constant accelerations lifts sliding
+#: spheres off each other (hsgran._cluster.CURVATURE_REL² / 2 = 5e-9), far below any gap that
+#: matters.
+TOUCH_REL = 1e-6
+
 #: A sphere whose event happens less than NO_PROGRESS_REL × max(1 s, t) after its previous one
 #: made no progress in time (collapse guard, jams, wedges). In a cage of touching bodies the
 #: time between collisions is the round-off of the predictions, a few ulps of the clock and

@@ -33,6 +33,7 @@ import math
 
 import numpy as np
 
+from hsgran._cluster import CL_SOLVED, cluster_collision, cluster_resolve
 from hsgran._flight import (
     MAX_ZERO_TIME_EVENTS,
     START_GAP_REL,
@@ -66,6 +67,7 @@ from hsgran._state import (
     F_T_END,
     F_TC_TIME,
     FL_ADHESION,
+    FL_CLUSTERS,
     FL_FRICTION,
     FL_GRAVITY,
     FL_LOG,
@@ -105,6 +107,7 @@ from hsgran.events.calendar import (
 from hsgran.events.grid import insert, remove, slot_of
 from hsgran.events.kinds import (
     EV_CELL,
+    EV_CLUSTER,
     EV_FRAME,
     EV_LAND,
     EV_MISS,
@@ -117,7 +120,7 @@ from hsgran.events.kinds import (
 )
 from hsgran.events.kinds import EVENT_NAMES as EVENT_NAMES  # re-exported for hsgran.engine
 from hsgran.motion import NEVER
-from hsgran.onplane import END_NONE, MS_ASLEEP, MS_FLIGHT, MS_REST
+from hsgran.onplane import END_NONE, END_RESOLVE, MS_ASLEEP, MS_FLIGHT, MS_REST
 
 #: Event-log entries one event can write: a collision, and a landing or the wedge stops of
 #: both spheres (or the two spheres of a mutual stop). The log buffer is flushed while it still
@@ -292,7 +295,7 @@ def _pair_handler(grav_on):
     anything, so neither loop compiles the other's collision)."""
 
     @njit(inline="always")
-    def on_pair(i, j, t, flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc,
+    def on_pair(i, j, t, flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc,
                 counts, rec, flags):
         """Collision of spheres i and j at time t [s] (their pair event is not stale)."""
         friction, rolling = flags[FL_FRICTION], flags[FL_ROLLING]
@@ -309,6 +312,13 @@ def _pair_handler(grav_on):
         dz = min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
         dist = math.sqrt(dx * dx + dy * dy + dz * dz)
         nx, ny, nz = dx / dist, dy / dist, dz / dist
+        if grav_on and flags[FL_CLUSTERS] and cluster_collision(
+                i, j, -1, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
+                rec, flags) == CL_SOLVED:
+            # touching other bodies: solved with them (it re-predicted them all)
+            counts[EV_CLUSTER] += 1
+            return _finish_collision(EV_PAIR, i, j, t, False, False, -1, -1, mstate, zstreak, out,
+                                     fsc, isc, counts, rec, log_on)
         if grav_on:
             # a slow meeting that ends in rest instead of a collision (see _settling.settle)
             rule, who, what = settle(i, j, nx, ny, nz, t, flight, dyn, walls, space.gravity,
@@ -379,8 +389,8 @@ def _wall_handler(grav_on):
     """The wall-collision handler of the loop with gravity or without (see _pair_handler)."""
 
     @njit(inline="always")
-    def on_wall(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc, counts, rec, flags,
-                ev_partner):
+    def on_wall(i, t, flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc,
+                counts, rec, flags, ev_partner):
         """Collision of sphere i with its event's plane at time t [s]."""
         rotation, log_on = flags[FL_ROTATION], flags[FL_LOG]
         st, counter, acc, mstate = flight.st, flight.counter, flight.acc, flight.mstate
@@ -388,6 +398,12 @@ def _wall_handler(grav_on):
         w = np.int64(ev_partner[i])
         note_progress(i, t, st, zstreak)
         advance(st, acc, omg, alpha, i, t, grav_on, rotation)
+        if grav_on and flags[FL_CLUSTERS] and cluster_collision(
+                i, -1, w, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
+                rec, flags) == CL_SOLVED:
+            counts[EV_CLUSTER] += 1
+            return _finish_collision(EV_WALL, i, -1 - w, t, False, False, -1, -1, mstate, zstreak,
+                                     out, fsc, isc, counts, rec, log_on)
         if grav_on and lands_before_wall(i, w, t, flight, dyn, walls, space.gravity, pair_table,
                                          fsc, flags):
             counter[i] += 1
@@ -437,15 +453,27 @@ _on_wall_free = _wall_handler(False)
 
 
 @njit(inline="always")
-def _on_state(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc, counts, flags,
-              grav_on, ev_partner):
+def _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc,
+              counts, rec, flags, grav_on, ev_partner):
     """Sphere i's on-plane motion segment ends at time t [s]: slide → roll, roll → rest, spin
     reversal; the next segment starts (MODEL §5.3)."""
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
     st, mstate, mplane, zstreak = flight.st, flight.mstate, flight.mplane, dyn.zstreak
     note_progress(i, t, st, zstreak)
-    advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, rotation)
     ended = ev_partner[i]
+    if ended == END_RESOLVE:
+        # a segment of constrained motion ends, or a support moved: solve the cluster again
+        fsc[F_DISSIPATED] += cluster_resolve(i, t, flight, dyn, walls, space, grid, sched, clus,
+                                             isc, pair_table, fsc, rec, flags)
+        counts[EV_CLUSTER] += 1
+        counts[EV_STATE] += 1
+        if _collapsed(isc, zstreak, i, -1):
+            return STATUS_COLLAPSE
+        if flags[FL_LOG] and _log(out, isc, t, 0.0, 0.0, math.nan, EV_STATE, i, -1, mstate[i],
+                                  ended):
+            return STATUS_LOG_FULL
+        return GO_ON
+    advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, rotation)
     enter_plane(i, np.int64(mplane[i]), t, np.int64(ended), flight, dyn, walls, space.gravity,
                 pair_table, fsc, friction, rolling, rotation)
     flight.counter[i] += 1
@@ -496,7 +524,7 @@ def _loop_of(grav_on):
     run-time switches, so every scene uses one of these two compiled loops."""
 
     @njit
-    def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
+    def run_loop(flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc, counts,
                  max_collisions, max_events, rec, flags):
         """Run events until t_end, a full buffer, ``max_collisions`` collisions or ``max_events``
         events of any kind (this call); returns a ``STATUS_*`` code.
@@ -564,20 +592,22 @@ def _loop_of(grav_on):
                             prefetch_cells(j, cell, grid.ncell, grid.head)
                         if grav_on:
                             r = _on_pair_gravity(i, j, t, flight, dyn, walls, space, grid, sched,
-                                                 out, pair_table, fsc, isc, counts, rec, flags)
+                                                 clus, out, pair_table, fsc, isc, counts, rec,
+                                                 flags)
                         else:
-                            r = _on_pair_free(i, j, t, flight, dyn, walls, space, grid, sched, out,
-                                              pair_table, fsc, isc, counts, rec, flags)
+                            r = _on_pair_free(i, j, t, flight, dyn, walls, space, grid, sched,
+                                              clus, out, pair_table, fsc, isc, counts, rec, flags)
                 elif kind == EV_WALL:
                     if grav_on:
-                        r = _on_wall_gravity(i, t, flight, dyn, walls, space, out, pair_table, fsc,
-                                             isc, counts, rec, flags, ev_partner)
+                        r = _on_wall_gravity(i, t, flight, dyn, walls, space, grid, sched, clus,
+                                             out, pair_table, fsc, isc, counts, rec, flags,
+                                             ev_partner)
                     else:
-                        r = _on_wall_free(i, t, flight, dyn, walls, space, out, pair_table, fsc,
-                                          isc, counts, rec, flags, ev_partner)
+                        r = _on_wall_free(i, t, flight, dyn, walls, space, grid, sched, clus, out,
+                                          pair_table, fsc, isc, counts, rec, flags, ev_partner)
                 elif grav_on and kind == EV_STATE:
-                    r = _on_state(i, t, flight, dyn, walls, space, out, pair_table, fsc, isc,
-                                  counts, flags, grav_on, ev_partner)
+                    r = _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out,
+                                  pair_table, fsc, isc, counts, rec, flags, grav_on, ev_partner)
                 else:  # EV_CELL (EV_NONE has time NEVER and is never popped)
                     r = _on_cell(i, flight, space, grid, isc, counts, ev_partner, large)
             if r == EXECUTED:
@@ -597,11 +627,11 @@ run_loop_gravity = _loop_of(True)
 run_loop_free = _loop_of(False)
 
 
-def run_loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
+def run_loop(flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc, counts,
              max_collisions, max_events, rec, flags):
     """Run events until t_end, a full buffer, ``max_collisions`` collisions or ``max_events``
     events of any kind; returns a ``STATUS_*`` code (the compiled loop for the scene's gravity
     switch, ``flags[FL_GRAVITY]``)."""
     loop = run_loop_gravity if flags[FL_GRAVITY] else run_loop_free
-    return loop(flight, dyn, walls, space, grid, sched, out, pair_table, fsc, isc, counts,
+    return loop(flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc, counts,
                 max_collisions, max_events, rec, flags)

@@ -9,7 +9,7 @@ pair event whose partner has moved on since is known to be stale (lazy invalidat
 
 from __future__ import annotations
 
-from hsgran._flight import PLANE_TOUCHING_REL, plane_gap, state_at
+from hsgran._flight import PLANE_TOUCHING_REL, TOUCH_REL, plane_gap, state_at
 from hsgran._jit import njit, prefetch
 from hsgran._state import I_PEND_A, I_PEND_B, I_SEQ, S_R
 from hsgran.events.calendar import calendar_update, has_buckets
@@ -21,7 +21,7 @@ from hsgran.motion import (
     pair_contact_before,
     plane_contact_time,
 )
-from hsgran.onplane import MS_FLIGHT
+from hsgran.onplane import MS_FLIGHT, MS_SUPPORTED
 
 #: Cells a crossed axis needs for the crossing to look only at the new layer of neighbouring
 #: cells (see predict): with 1 or 2 the lists of that axis are not neighbour layers.
@@ -103,6 +103,44 @@ def axis_cells(c, n, length, periodic, k, ac, ah):
     return 3
 
 
+@njit(inline="always")
+def held_apart(dx, dy, dz, dvx, dvy, dvz, dax, day, daz, sigma, slack, horizon):
+    """Whether a pair with a supported sphere (hsgran._cluster), at separation d = (dx, dy, dz)
+    [m], relative velocity dv [m/s] and acceleration da [m/s²], touches (gap ≤ TOUCH_REL σ)
+    with a normal velocity that stays above −``slack`` [m/s] for the ``horizon`` [s] its
+    constant accelerations last: then it does not meet within them (its gap changes as
+    2σ n·D + |D|² with n·D ≥ −slack τ, D = dv τ + da τ²/2)."""
+    d2 = dx * dx + dy * dy + dz * dz
+    reach = sigma * (1.0 + TOUCH_REL)
+    if d2 > reach * reach:
+        return False
+    d = max(d2 ** 0.5, 1e-300)
+    vn = (dx * dvx + dy * dvy + dz * dvz) / d
+    an = (dx * dax + dy * day + dz * daz) / d
+    return vn >= -slack and vn + min(an, 0.0) * horizon >= -slack
+
+
+@njit(inline="always")
+def cell_heads(s, grid, space):
+    """Write the list heads of the cells around sphere s's (those that are not empty) into
+    ``grid.heads`` and return how many (for cold callers that walk its neighbours; positions
+    are compared by nearest image, so the shifts are not needed)."""
+    ncell, cell, head, ac, ah, heads = grid.ncell, grid.cell, grid.head, grid.ac, grid.ah, \
+        grid.heads
+    mx = axis_cells(cell[s, 0], ncell[0], space.box_len[0], space.periodic[0], 0, ac, ah)
+    my = axis_cells(cell[s, 1], ncell[1], space.box_len[1], space.periodic[1], 1, ac, ah)
+    mz = axis_cells(cell[s, 2], ncell[2], space.box_len[2], space.periodic[2], 2, ac, ah)
+    m = 0
+    for x in range(mx):
+        for y in range(my):
+            for z in range(mz):
+                q = head[(ac[0, x] * ncell[1] + ac[1, y]) * ncell[2] + ac[2, z]]
+                if q >= 0:
+                    heads[m] = q
+                    m += 1
+    return m
+
+
 # long: the hot path of every scene, inlined into the loop at one call site; its steps (cell
 # exit, planes, the neighbours' lists) share the sphere's state at t_now and the best event so
 # far, which split functions would pass back and forth as tuples
@@ -146,6 +184,7 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
         gi = (0.0, 0.0, 0.0)
     xs = (xi, yi, zi)
     us = (ui, vi, wi)
+    supported = grav_on and mstate[i] == MS_SUPPORTED
     for k in range(3):
         lo = origin[k] + cell[i, k] * csize[k]
         tau, side = face_exit_time(xs[k], us[k], gi[k], lo, lo + csize[k])
@@ -166,7 +205,11 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
             # zero-time pair event of a sphere wedged between neighbours on this plane)
             gap = 0.0
         gn = gi[0] * nx + gi[1] * ny + gi[2] * nz
-        tau = plane_contact_time(gap, ui * nx + vi * ny + wi * nz, gn)
+        vn = ui * nx + vi * ny + wi * nz
+        if supported and gap <= TOUCH_REL * ri and vn >= -space.slack[0] \
+                and vn + min(gn, 0.0) * (seg_end[i] - t_now) >= -space.slack[0]:
+            continue  # held by the plane: no contact within the segment (held_apart)
+        tau = plane_contact_time(gap, vn, gn)
         if tau < best:
             best = tau
             kind = EV_WALL
@@ -232,7 +275,12 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
             if j != i:
                 xj, yj, zj, uj, vj, wj = state_at(st, acc, j, t_now, grav_on)
                 horizon = min(best, pbest) if grav_on else pbest
-                if grav_on and (acc[j, 0] != gi[0] or acc[j, 1] != gi[1] or acc[j, 2] != gi[2]):
+                if grav_on and (supported or mstate[j] == MS_SUPPORTED) and held_apart(
+                        ox - xj, oy - yj, oz - zj, ui - uj, vi - vj, wi - wj, gi[0] - acc[j, 0],
+                        gi[1] - acc[j, 1], gi[2] - acc[j, 2], ri + st[j, S_R], space.slack[0],
+                        min(seg_end[i], seg_end[j]) - t_now):
+                    tau = NEVER
+                elif grav_on and (acc[j, 0] != gi[0] or acc[j, 1] != gi[1] or acc[j, 2] != gi[2]):
                     # different accelerations (one of them on a plane): a quartic, wanted only
                     # up to the end of j's current motion segment (j's transition re-predicts)
                     tau = pair_contact_accelerated(

@@ -226,7 +226,7 @@ def wake_sleepers(s, t, flight, dyn, walls, space, grid, sched, isc, grav_on, ro
     st, counter, acc = flight.st, flight.counter, flight.acc
     mstate, mplane = flight.mstate, flight.mplane
     omg, alpha = dyn.omg, dyn.alpha
-    gravity, box_len, periodic = space
+    gravity, box_len, periodic = space.gravity, space.box_len, space.periodic
     ncell, cell, head, nxt, ac, ah, stack = grid.ncell, grid.cell, grid.head, grid.nxt, grid.ac, \
         grid.ah, grid.stack
     top = 0
@@ -499,7 +499,7 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
     no_end = np.int64(END_NONE)
     st, mstate, mplane = flight.st, flight.mstate, flight.mplane
     omg, inv_m, inv_i, mat, zstreak = dyn.omg, dyn.inv_m, dyn.inv_i, dyn.mat, dyn.zstreak
-    gravity, box_len, periodic = space
+    gravity, box_len, periodic = space.gravity, space.box_len, space.periodic
     planes_n = walls.planes_n
     wedged_a = wedged_b = -1
     rest_i = mstate[i] == MS_REST

@@ -1,6 +1,6 @@
 """The engine's state by name (layer 5; used by :mod:`hsgran.engine` and the compiled loop).
 
-The compiled event loop takes its arrays in seven groups. Each group is a named tuple: numba
+The compiled event loop takes its arrays in eight groups. Each group is a named tuple: numba
 compiles an attribute access (``flight.st``) to the same code as the positional one it replaces,
 and a reader sees what each array is. The groups, and every field's role, are listed once here:
 
@@ -39,8 +39,11 @@ Flight = namedtuple("Flight", "st counter acc mstate mplane seg_end seg_code pc_
 Dyn = namedtuple("Dyn", "omg inv_m inv_i mat zstreak alpha seg_dir t_last row_tc rapid")
 #: The planes: a point [m], unit normal, material, velocity [m/s] and angular velocity [rad/s].
 Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg")
-#: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic.
-Space = namedtuple("Space", "gravity box_len periodic")
+#: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic; ``slack``: a
+#: touching contact of a sphere in constrained motion (MS_SUPPORTED, hsgran._cluster) whose
+#: normal velocity stays above −slack[0] [m/s] until its segment ends is no contact event (the
+#: cluster solver's tolerance, not an approach; 0 without clusters).
+Space = namedtuple("Space", "gravity box_len periodic slack")
 #: The cell grid (hsgran.events.grid): origin [m], cell size [m], cells per axis, each sphere's
 #: cell, the linked lists (``head``, ``nxt``, ``prv``), and scratch space: 27 list heads and
 #: their image shifts [m], the per-axis list coordinates ``ac`` and shifts ``ah`` [m] of a
@@ -50,16 +53,27 @@ Grid = namedtuple("Grid", "origin csize ncell cell head nxt prv heads shifts ac 
 #: kind (hsgran.events.kinds), partner, the partner's counter at prediction; ``cal`` the event
 #: calendar (hsgran.events.calendar), whose keys are ``ev_t`` and ``ev_seq``.
 Sched = namedtuple("Sched", "ev_t ev_seq ev_kind ev_partner ev_pcount cal")
+#: Scratch of a cluster of contacts solved together (hsgran._cluster; with gravity only): the
+#: bodies (``cl_body`` the sphere of each, ``cl_loc`` each sphere's body or −1, ``cl_was`` its
+#: motion state before, ``cl_depth`` its contact distance from the event's spheres; inverse mass
+#: [1/kg], inverse moment of inertia [1/(kg m²)], radius [m]; velocities ``cl_v`` [m/s] and
+#: spins ``cl_w`` [rad/s], accelerations ``cl_a`` [m/s²] and ``cl_al`` [rad/s²]) and the
+#: contacts (``ck_*``: the arrays of hsgran.contact.cluster.solve, the partner ``ck_q`` (a
+#: sphere, or −1 − w for plane w), its material ``ck_mat``, the normal velocity after the
+#: impulses ``ck_un`` [m/s], and the immovable body's acceleration ``ck_ab`` [m/s²]).
+Clus = namedtuple("Clus", "cl_body cl_loc cl_was cl_depth cl_inv_m cl_inv_i cl_rad cl_v cl_w "
+                          "cl_a cl_al ck_a ck_b ck_q ck_mat ck_n ck_rb ck_vb ck_ab ck_tgt ck_mu "
+                          "ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr ck_un")
 #: Output buffers: frame times [s], positions [m], velocities [m/s], spins [rad/s], the event
 #: log (floats ``log_f``: time, J_n, J_t, e_n; ints ``log_i``: kind, i, j, stage, regime) and
 #: motion states per frame.
 Out = namedtuple("Out", "fr_time fr_pos fr_vel fr_omg log_f log_i fr_ms")
 
 #: The groups in the order the loop takes them.
-GROUPS = (Flight, Dyn, Walls, Space, Grid, Sched, Out)
+GROUPS = (Flight, Dyn, Walls, Space, Grid, Sched, Clus, Out)
 
 #: Fields the loop overwrites before it reads them (not stored in checkpoints).
-SCRATCH = frozenset({"row_tc", "heads", "shifts", "ac", "ah", "stack"})
+SCRATCH = frozenset({"row_tc", "heads", "shifts", "ac", "ah", "stack"}) | set(Clus._fields)
 #: Fields rebuilt or emptied rather than stored: the calendar (rebuilt from ``ev_t``/``ev_seq``)
 #: and the output buffers (handed to the observers before every checkpoint).
 NOT_STORED = SCRATCH | {"cal"} | set(Out._fields)
@@ -69,7 +83,7 @@ def stored_fields(groups) -> dict:
     """The arrays a checkpoint holds, by field name (views of the live arrays).
 
     Args:
-        groups: The seven group tuples (:data:`GROUPS` order).
+        groups: The group tuples (:data:`GROUPS` order).
     """
     return {name: array for group in groups
             for name, array in zip(group._fields, group, strict=True) if name not in NOT_STORED}
@@ -89,7 +103,8 @@ F_CHI = 5  #: rolling-torque convention while sliding (hsgran.onplane CONVENTION
 #: previous collision is elastic (e_n = 1; friction still acts), which ends the infinite
 #: sequences of ever-smaller collisions of inelastic collapse in clusters; 0 turns it off
 F_TC_TIME = 6
-F_SIZE = 7
+F_CLUSTER_LOSS = 7  #: energy the contact clusters took so far [J] (part of F_DISSIPATED)
+F_SIZE = 8
 # int scalars
 I_SEQ = 0  #: next sequence number (tie-break)
 I_N_FRAMES = 1  #: frames in the buffer
@@ -100,7 +115,10 @@ I_COLLAPSED = 5  #: sphere that triggered the collapse guard, or −1
 I_PEND_A = 6  #: a sphere whose next event must be predicted before the next pop, or −1
 I_PEND_B = 7  #: a second one, or −1
 I_PEND_LAYER = 8  #: the cell face that the sphere in I_PEND_A just crossed (EV_CELL), or −1
-I_SIZE = 9
+I_SWEEPS = 9  #: Gauss–Seidel sweeps of the cluster solves so far (hsgran._cluster; their cost)
+I_SHORT = 10  #: cluster segments cut to the shortest (MIN_SEGMENT_REL)
+I_UNSOLVED = 11  #: cluster force solves that ended short of the slack (not converged)
+I_SIZE = 12
 
 # effect and engine switches: the ``flags`` argument, a bool array of FL_SIZE entries. They are
 # run-time values, so one compiled loop serves every scene with gravity and one every scene
@@ -113,7 +131,10 @@ FL_ADHESION = 3  #: adhesion in recovery (MODEL §3.8)
 FL_ROTATION = 4  #: spins are tracked
 FL_GRAVITY = 5  #: parabolic flight, on-plane motion states
 FL_LOG = 6  #: record every event in the log buffer
-FL_SIZE = 7
+#: touching spheres and walls are solved as clusters (hsgran._cluster) instead of by the
+#: pairwise rules of hsgran._settling (docs/enduring-contact.md)
+FL_CLUSTERS = 7
+FL_SIZE = 8
 
 # What a prediction reads of a neighbour sits in one 64-byte row (one cache line) of ``st``:
 S_X = 0  #: position x, y, z at the sphere's local time [m] (columns 0–2)
@@ -150,6 +171,15 @@ SPHERE_RECORD = np.dtype({
 FIELD_MIN = 2
 
 
+#: Most bodies a cluster of contacts solves together (hsgran._cluster): moving spheres beyond
+#: are its boundary, moving as they were.
+MAX_CLUSTER_BODIES = 4096
+#: Room for contacts per body of a cluster: a sphere among spheres three times smaller touches
+#: up to ~30 of them, but each contact is stored once, by the first of its two bodies, so a
+#: cluster averages about 3 (half the coordination number of a pile) plus its walls.
+CONTACTS_PER_BODY = 16
+
+
 @dataclass(frozen=True)
 class Sizes:
     """The sizes every field's shape is made of (:data:`FIELDS`)."""
@@ -162,6 +192,7 @@ class Sizes:
     row: int  #: length of a pair-table row (hsgran.materials P_*)
     frames: int  #: frames in the frame buffer
     log: int  #: entries in the event-log buffer
+    clusters: bool = False  #: contacts are solved as clusters (scratch for them)
 
     def value(self, symbol) -> int:
         """The size a shape symbol stands for (an int stands for itself)."""
@@ -180,6 +211,10 @@ class Sizes:
             "frames": self.frames, "log": self.log,
             "fr": self.frames if r else 1,  # spin frames: with rotation only
             "nr": n if r else 1,
+            # cluster scratch: bodies and contacts (with clusters only)
+            "cb": min(n, MAX_CLUSTER_BODIES) if self.clusters else 1,
+            "ck": CONTACTS_PER_BODY * min(n, MAX_CLUSTER_BODIES) if self.clusters else 1,
+            "cn": n if self.clusters else 1,
         }[symbol]
 
 
@@ -232,6 +267,7 @@ FIELDS = (
     _f("Space", "gravity", "f8", (3,)),
     _f("Space", "box_len", "f8", (3,)),
     _f("Space", "periodic", "?", (3,)),
+    _f("Space", "slack", "f8", (1,)),
     _f("Grid", "origin", "f8", (3,)),
     _f("Grid", "csize", "f8", (3,)),
     _f("Grid", "ncell", "i8", (3,)),
@@ -252,6 +288,35 @@ FIELDS = (
     _f("calendar", "where", "i8", ("e",), packed=True),
     _f("calendar", "qnext", "i4", ("e",), packed=True),
     _f("calendar", "qprev", "i4", ("e",), packed=True),
+    _f("Clus", "cl_body", "i4", ("cb",)),
+    _f("Clus", "cl_loc", "i4", ("cn",), fill=-1),
+    _f("Clus", "cl_was", "i1", ("cb",)),
+    _f("Clus", "cl_depth", "i4", ("cb",)),
+    _f("Clus", "cl_inv_m", "f8", ("cb",)),
+    _f("Clus", "cl_inv_i", "f8", ("cb",)),
+    _f("Clus", "cl_rad", "f8", ("cb",)),
+    _f("Clus", "cl_v", "f8", ("cb", 3)),
+    _f("Clus", "cl_w", "f8", ("cb", 3)),
+    _f("Clus", "cl_a", "f8", ("cb", 3)),
+    _f("Clus", "cl_al", "f8", ("cb", 3)),
+    _f("Clus", "ck_a", "i8", ("ck",)),
+    _f("Clus", "ck_b", "i8", ("ck",)),
+    _f("Clus", "ck_q", "i8", ("ck",)),
+    _f("Clus", "ck_mat", "i8", ("ck",)),
+    _f("Clus", "ck_n", "f8", ("ck", 3)),
+    _f("Clus", "ck_rb", "f8", ("ck",)),
+    _f("Clus", "ck_vb", "f8", ("ck", 3)),
+    _f("Clus", "ck_ab", "f8", ("ck", 3)),
+    _f("Clus", "ck_tgt", "f8", ("ck",)),
+    _f("Clus", "ck_mu", "f8", ("ck",)),
+    _f("Clus", "ck_slip", "f8", ("ck", 3)),
+    _f("Clus", "ck_mur", "f8", ("ck",)),
+    _f("Clus", "ck_reff", "f8", ("ck",)),
+    _f("Clus", "ck_rslip", "f8", ("ck", 3)),
+    _f("Clus", "ck_pn", "f8", ("ck",)),
+    _f("Clus", "ck_pt", "f8", ("ck", 3)),
+    _f("Clus", "ck_hr", "f8", ("ck", 3)),
+    _f("Clus", "ck_un", "f8", ("ck",)),
     _f("Out", "fr_time", "f8", ("frames",)),
     _f("Out", "fr_pos", "f8", ("frames", "n", 3)),
     _f("Out", "fr_vel", "f8", ("frames", "n", 3)),
@@ -307,7 +372,7 @@ def allocate(sizes: Sizes, packed: bool) -> dict:
 
 
 def groups_of(arrays: dict, calendar) -> tuple:
-    """The seven group tuples (:data:`GROUPS`) over ``arrays`` (by field name) and the event
+    """The group tuples (:data:`GROUPS`) over ``arrays`` (by field name) and the event
     calendar; the tuples hold references, so the compiled loop updates the arrays in place."""
     return tuple(group(*(calendar if name == "cal" else arrays[name] for name in group._fields))
                  for group in GROUPS)

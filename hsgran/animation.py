@@ -25,7 +25,15 @@ import numpy as np
 from hsgran.contact.tangential import REGIME_NONE, REGIME_ROLLING, REGIME_SLIDING
 from hsgran.errors import InputError
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
-from hsgran.onplane import MS_ASLEEP, MS_FLIGHT, MS_REST, MS_ROLLING, MS_SLIDING
+from hsgran.onplane import (
+    MOTION_STATE_NAMES,
+    MS_ASLEEP,
+    MS_FLIGHT,
+    MS_REST,
+    MS_ROLLING,
+    MS_SLIDING,
+    MS_SUPPORTED,
+)
 from hsgran.scene import Plane
 
 # ---- time sampling -----------------------------------------------------------------------
@@ -86,14 +94,17 @@ COLOR_BY = ("speed", "state", "material", "regime")
 
 #: Motion-state categories (hsgran.onplane.MS_*) and one for "not known" (a file without
 #: motion states and without an event log to rebuild them from).
-STATE_UNKNOWN = 5
+STATE_UNKNOWN = len(MOTION_STATE_NAMES)
 STATE_LABELS = {MS_FLIGHT: "flight", MS_SLIDING: "sliding", MS_ROLLING: "rolling",
-                MS_REST: "at rest", MS_ASLEEP: "asleep", STATE_UNKNOWN: "unknown"}
+                MS_REST: "at rest", MS_ASLEEP: "asleep", MS_SUPPORTED: "supported",
+                STATE_UNKNOWN: "unknown"}
 #: sRGB [0-1]; flight is a cool colour, the on-plane states run warm to neutral as the
-#: sphere calms down (sliding orange, rolling green, rest grey-blue), asleep is violet.
+#: sphere calms down (sliding orange, rolling green, rest grey-blue), asleep is violet,
+#: supported (moving on several contacts) teal.
 STATE_COLORS = {MS_FLIGHT: (0.33, 0.62, 0.90), MS_SLIDING: (0.95, 0.50, 0.10),
                 MS_ROLLING: (0.20, 0.70, 0.30), MS_REST: (0.45, 0.50, 0.60),
-                MS_ASLEEP: (0.58, 0.40, 0.74), STATE_UNKNOWN: (0.70, 0.70, 0.70)}
+                MS_ASLEEP: (0.58, 0.40, 0.74), MS_SUPPORTED: (0.10, 0.60, 0.60),
+                STATE_UNKNOWN: (0.70, 0.70, 0.70)}
 
 #: Categories of ``--color-by regime``: the tangential regime of each sphere's last collision
 #: (hsgran.contact.tangential.REGIME_* + 1), or no collision yet.

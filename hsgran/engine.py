@@ -39,6 +39,7 @@ import numpy as np
 
 from hsgran import _loop as ev
 from hsgran import _state as es
+from hsgran._cluster import slack
 from hsgran._flight import MAX_ZERO_TIME_EVENTS
 from hsgran._state import FIELDS, Sizes, allocate, groups_of, stored_fields
 from hsgran.contact.model import REC_SIZE
@@ -63,8 +64,9 @@ EVENTS_PER_CALL = 200_000
 #: Version of the checkpoint layout (:meth:`Simulation.checkpoint`); a checkpoint of another
 #: version is refused rather than misread (2: the pair contacts kept for cell crossings; 3: the
 #: "wedge" event count; 4: per-sphere fields at least FIELD_MIN long; 5: arrays named by field,
-#: hsgran._state, scratch space no longer stored).
-CHECKPOINT_VERSION = 5
+#: hsgran._state, scratch space no longer stored; 6: the "cluster" event count, the cluster
+#: slack ``Space.slack`` and the cluster scalars).
+CHECKPOINT_VERSION = 6
 
 
 class SimulationError(HsgranError):
@@ -170,13 +172,14 @@ def _mechanical(kin_t, kin_r, pot):
 LARGE_FROM = 1 << 16
 
 
-def _flags(eff, log_events: bool) -> np.ndarray:
-    """The loop's switches (hsgran._state FL_*) for an effect set."""
+def _flags(eff, log_events: bool, clusters: bool = False) -> np.ndarray:
+    """The loop's switches (hsgran._state FL_*) for an effect set (``clusters``: the scene's
+    enduring-contact treatment is "clusters", which needs gravity)."""
     flags = np.zeros(es.FL_SIZE, dtype=np.bool_)
     for k, on in ((es.FL_PLASTICITY, eff.plasticity), (es.FL_FRICTION, eff.friction),
                   (es.FL_ROLLING, eff.rolling_resistance), (es.FL_ADHESION, eff.adhesion),
                   (es.FL_ROTATION, eff.rotation), (es.FL_GRAVITY, eff.gravity),
-                  (es.FL_LOG, log_events)):
+                  (es.FL_LOG, log_events), (es.FL_CLUSTERS, clusters and eff.gravity)):
         flags[k] = bool(on)
     return flags
 
@@ -257,7 +260,8 @@ class Simulation:
         self.n = n
         self.rotation = bool(eff.rotation)
         self.log_events = bool(log_events)
-        self.flags = _flags(eff, self.log_events)
+        clusters = scene.treatment == "clusters"
+        self.flags = _flags(eff, self.log_events, clusters)
         self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)  # [kg]
         self.inertia = SOLID_SPHERE_INERTIA * self.mass * scene.radius**2  # [kg m²]
         self.pair_table = np.ascontiguousarray(scene.pair_table())
@@ -268,13 +272,16 @@ class Simulation:
                       row=self.pair_table.shape[-1],
                       frames=frame_buffer or max(1, min(FRAME_BUFFER_MAX,
                                                         FRAME_BUFFER_BYTES // per_frame)),
-                      log=LOG_BUFFER if self.log_events else 1)
+                      log=LOG_BUFFER if self.log_events else 1,
+                      clusters=bool(self.flags[es.FL_CLUSTERS]))
         if large is None:
             large = n >= LARGE_FROM
         a = allocate(sizes, packed=large)
         a["origin"][:], a["csize"][:], a["ncell"][:], a["box_len"][:] = (origin, csize, ncell,
                                                                           box_len)
         _fill_from_scene(a, scene, self.mass)
+        if self.flags[es.FL_CLUSTERS]:
+            a["slack"][0] = slack(scene.effective_landing_speed)
         # one pending event per sphere, entry n is the frame tick
         calendar = new_calendar(n + 1, a["where"], a["qnext"], a["qprev"], buckets=large)
         self._groups = groups_of(a, calendar)
@@ -298,7 +305,7 @@ class Simulation:
         self.ev_t[n] = 0.0
         self.ev_seq[n] = 0
         self.isc[es.I_SEQ] = 1
-        flight, dyn, walls, space, grid, sched, _ = self._groups
+        flight, dyn, walls, space, grid, sched = self._groups[:6]
         ev.init(flight, dyn, walls, space, grid, sched, self.pair_table, self.fsc, self.isc,
                 self.flags)
 

@@ -48,12 +48,18 @@ MS_REST = 3  #: on a plane, at rest
 #: Output only (trajectory frames): at rest on another sphere. The engine keeps such a sphere as
 #: ``MS_REST`` with its support sphere in place of a plane.
 MS_ASLEEP = 4
-MOTION_STATE_NAMES = ("flight", "sliding", "rolling", "rest", "asleep")
+#: Moving with the constant accelerations a cluster of resting contacts gives it (hsgran._cluster):
+#: sliding or rolling on spheres or on several walls at once.
+MS_SUPPORTED = 5
+MOTION_STATE_NAMES = ("flight", "sliding", "rolling", "rest", "asleep", "supported")
 
 END_NONE = 0  #: the segment lasts until something hits the sphere
 END_SLIP = 1  #: the slip vanishes (C): snap to rolling
 END_SPIN = 2  #: the rolling spin passes through zero (convention A, backspin)
 END_STOP = 3  #: the speed along the rolling direction vanishes (C′)
+#: the contacts of a cluster are solved again (hsgran._cluster): the segment's constant
+#: accelerations have lasted as long as they may, or a support moved
+END_RESOLVE = 4
 
 CONVENTION_A = 1.0  #: χ = 1: rolling torque acts while sliding as well
 CONVENTION_B = 0.0  #: χ = 0: rolling torque acts only while rolling

@@ -136,7 +136,10 @@ AXES = "xyz"
 
 TOP_KEYS = ("scene", "output", "materials", "contacts", "walls", "particles", "fill",
             "enduring_contact")
-ENDURING_KEYS = ("landing_speed", "rolling_convention", "tc_time")
+ENDURING_KEYS = ("landing_speed", "rolling_convention", "tc_time", "treatment")
+#: How touching spheres and walls are treated under gravity (docs/enduring-contact.md): the
+#: pairwise rules of hsgran._settling, or clusters solved together (hsgran._cluster).
+TREATMENTS = ("pairwise", "clusters")
 #: Default rebound speed [m/s] below which a sphere bouncing on a plane stays on it (sliding,
 #: rolling or resting, MODEL §5.3). Such a rebound would rise v²/2g = 51 nm, below any surface
 #: roughness; giving it up costs at most ½ m v² of kinetic energy and the remaining bounces'
@@ -214,6 +217,8 @@ class Scene:
             rolling), MODEL §5.3.
         tc_time: TC-model time [s]: collisions of a sphere closer together than this are
             elastic (0: off).
+        treatment: "pairwise" (the enduring-contact rules) or "clusters" (touching bodies
+            solved together), docs/enduring-contact.md.
         overrides: Key path → value changes applied to the file before validation
             (:mod:`hsgran.overrides`); ``text`` then ends with :func:`override_note`.
     """
@@ -240,6 +245,7 @@ class Scene:
     landing_speed: float = DEFAULT_LANDING_SPEED
     rolling_convention: str = "A"
     tc_time: float = DEFAULT_TC_TIME
+    treatment: str = "pairwise"
     overrides: dict = field(default_factory=dict)
 
     @property
@@ -454,6 +460,7 @@ class _Enduring:
     landing_speed: float
     tc_time: float
     rolling_convention: str
+    treatment: str
 
 
 @dataclass(frozen=True, eq=False)
@@ -577,6 +584,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
         landing_speed=enduring.landing_speed,
         rolling_convention=enduring.rolling_convention,
         tc_time=enduring.tc_time,
+        treatment=enduring.treatment,
     )
 
 
@@ -635,7 +643,11 @@ def _parse_enduring(doc: dict) -> _Enduring:
         raise InputError(f"must be \"A\" ({ROLLING_CONVENTIONS['A']}) or \"B\" "
                          f"({ROLLING_CONVENTIONS['B']}), got {short_repr(conv)}",
                          "enduring_contact.rolling_convention")
-    return _Enduring(landing_speed, tc_time, conv)
+    treatment = tab.get("treatment", "pairwise")
+    if treatment not in TREATMENTS:
+        raise InputError(f"must be one of {', '.join(repr(t) for t in TREATMENTS)}, got "
+                         f"{short_repr(treatment)}", "enduring_contact.treatment")
+    return _Enduring(landing_speed, tc_time, conv, treatment)
 
 
 def _parse_output(doc: dict, duration: float) -> float:

@@ -23,6 +23,7 @@ LAYERS = {
     "_flight": 5,
     "_predict": 5,
     "_settling": 5,
+    "_cluster": 5,
     "contact.": 2,
     "motion": 2,
     "onplane": 2,

@@ -90,7 +90,7 @@ import sys
 import tempfile
 import time
 from concurrent.futures import ThreadPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -100,6 +100,7 @@ from scipy.spatial import cKDTree
 
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_WALL, EVENT_NAMES
 from hsgran.placement import Space, overlapping_pairs
+from hsgran.scene import TREATMENTS
 
 ROOT = Path(__file__).resolve().parent.parent
 if str(ROOT / "tools") not in sys.path:  # settle_report, when loaded by file path (tests)
@@ -1192,6 +1193,12 @@ def write_rows(rows: list[dict], path: Path) -> None:
         path.write_text(json.dumps(rows, indent=1))
 
 
+def with_treatment(spec: SceneSpec, treatment: str) -> SceneSpec:
+    """The scene with its enduring contact treated as ``treatment`` (hsgran.scene.TREATMENTS)."""
+    return replace(spec, text=spec.text + f'\n[enduring_contact]\ntreatment = '
+                               f'"{treatment}"\n')
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--count", type=int, default=40, help="scenes of the corpus")
@@ -1205,6 +1212,8 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, help="rows as CSV (.csv) or JSON")
     ap.add_argument("--write-scenes", type=Path, metavar="DIR", help="save the scene files")
     ap.add_argument("--dry-run", action="store_true", help="draw and list, do not run")
+    ap.add_argument("--treatment", choices=TREATMENTS, default="pairwise",
+                    help="[enduring_contact] treatment of every scene (docs/enduring-contact.md)")
     ap.add_argument("--run-scene", metavar="FILE", help=argparse.SUPPRESS)  # one child
     args = ap.parse_args(argv)
     if args.run_scene:
@@ -1213,6 +1222,8 @@ def main(argv=None) -> int:
         ap.error("--count >= 0, --jobs >= 1, --timeout > 0 and --max-count >= 1")
     specs = sample() if args.sample else corpus(args.corpus_seed, args.count, first=args.first,
                                                 max_count=args.max_count)
+    if args.treatment != "pairwise":
+        specs = [with_treatment(spec, args.treatment) for spec in specs]
     if args.dry_run:
         if args.write_scenes:
             args.write_scenes.mkdir(parents=True, exist_ok=True)

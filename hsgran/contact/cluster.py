@@ -40,10 +40,6 @@ from hsgran._jit import njit
 #: contacts along one line (Newton's cradle, a column) are the slowest case, needing sweeps of
 #: the order of the square of their length.
 MAX_SWEEPS = 20000
-#: Converged when no contact's impulse changed in the last sweep by more than this fraction of
-#: the largest impulse of the cluster (~1e4 ulp: below it, the change is round-off of the
-#: velocities the impulses are computed from).
-SOLVE_REL_TOL = 1e-12
 
 
 @njit(inline="always")
@@ -152,11 +148,21 @@ def _rolling_step(k, ca, cb, cn, inv_i, w, hr, rslip, limit):
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
+@njit
+def _worst(nc, ca, cb, cn, crb, cvb, target, rad, v, w, rotation):
+    """The largest amount by which a contact's relative normal velocity is below its target."""
+    worst = -math.inf
+    for k in range(nc):
+        ux, uy, uz = _contact_velocity(k, ca, cb, cn, crb, cvb, rad, v, w, rotation)
+        worst = max(worst, target[k] - (ux * cn[k, 0] + uy * cn[k, 1] + uz * cn[k, 2]))
+    return worst
+
+
 # long: one Gauss–Seidel sweep's local solve (normal, Coulomb cone, rolling couple) shares the
 # contact's frame and the old impulses; split, they would travel back and forth as tuples
 @njit
 def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, inv_i, rad, v,
-          w, pn, pt, hr, rotation, friction, rolling, max_sweeps=MAX_SWEEPS, rel_tol=SOLVE_REL_TOL):
+          w, pn, pt, hr, rotation, friction, rolling, tol, max_sweeps=MAX_SWEEPS):
     """Solve the contacts of a cluster together by non-smooth Gauss–Seidel (see the module).
 
     Args:
@@ -182,8 +188,11 @@ def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, i
             [N]) and rolling couple [N m s] (or torque [N m]) of each contact, updated in
             place (zeros to start cold; the values of an earlier solve to start warm).
         rotation, friction, rolling: Which parts are solved (the scene's effects).
-        max_sweeps, rel_tol: Stop after this many sweeps, or once no impulse changed in a
-            sweep by more than rel_tol times the largest impulse.
+        tol: Converged when no contact's impulse changed in a sweep by more than it takes to
+            change the contact's relative velocity by ``tol`` [m/s] (or acceleration [m/s²];
+            for a rolling couple, R* times the relative angular velocity), and no contact's
+            normal velocity is more than ``tol`` below its target.
+        max_sweeps: Stop after this many sweeps even if not converged.
 
     Returns:
         (sweeps, worst): sweeps done, and the largest amount by which a contact's relative
@@ -192,8 +201,7 @@ def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, i
     sweeps = 0
     for sweep in range(max_sweeps):
         sweeps = sweep + 1
-        change = change_r = 0.0
-        scale = scale_r = 0.0
+        change = 0.0
         for k in range(nc):
             a = ca[k]
             b = cb[k]
@@ -234,19 +242,14 @@ def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, i
                 dy += qy - ty
                 dz += qz - tz
             _apply(k, dx, dy, dz, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, rotation)
-            d = math.sqrt(dx * dx + dy * dy + dz * dz)
+            change = max(change, math.sqrt(dx * dx + dy * dy + dz * dz) * w_t)
             if rolling and rotation and mur[k] > 0.0:
                 limit = mur[k] * reff[k] * p_new
-                change_r = max(change_r, _rolling_step(k, ca, cb, cn, inv_i, w, hr, rslip,
-                                                       limit))
-                scale_r = max(scale_r, limit)
-            change = max(change, d)
-            scale = max(scale, p_new)
-        if change <= rel_tol * scale and change_r <= rel_tol * scale_r:
+                inv_b = inv_i[b] if b >= 0 else 0.0
+                change = max(change, _rolling_step(k, ca, cb, cn, inv_i, w, hr, rslip, limit)
+                             * (inv_i[a] + inv_b) * reff[k])
+        if change <= tol and _worst(nc, ca, cb, cn, crb, cvb, target, rad, v, w,
+                                    rotation) <= tol:
             break
-    worst = 0.0
-    for k in range(nc):
-        ux, uy, uz = _contact_velocity(k, ca, cb, cn, crb, cvb, rad, v, w, rotation)
-        un = ux * cn[k, 0] + uy * cn[k, 1] + uz * cn[k, 2]
-        worst = max(worst, target[k] - un)
+    worst = _worst(nc, ca, cb, cn, crb, cvb, target, rad, v, w, rotation)
     return sweeps, worst

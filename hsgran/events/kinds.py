@@ -68,6 +68,10 @@ KINDS = (
     EventKind(11, "wedge", True,
               "a sphere stopped in a zero-time wedge sequence; j the other body of the "
               "collision, stage the new motion state, regime 0"),
+    EventKind(12, "cluster", False,
+              "touching spheres and walls solved together (docs/enduring-contact.md, "
+              "\"Clusters of contacts\"); a collision among them is also counted and logged "
+              "as pair or wall, with stage −2; a segment's end as state"),
 )
 
 #: Names of the kinds in code order.

@@ -18,6 +18,9 @@ G = 9.81
 #: Relative accuracy asked of a converged solve (the solver stops at 1e-12 change per sweep;
 #: chains accumulate the residual over their length).
 TOL = 1e-9
+#: Convergence tolerance of the solves [m/s or m/s²]: 1e-13 of the speeds and accelerations
+#: of these cases (~0.1–10).
+SOLVE_TOL = 1e-13
 
 
 class Cluster:
@@ -50,7 +53,7 @@ class Cluster:
                               np.array(col[7]), np.array(col[8], float),
                               np.array(col[9], float), np.zeros((nc, 3)), self.inv_m,
                               self.inv_i, self.rad, self.v, self.w, self.pn, self.pt,
-                              self.hr, rotation, friction, rolling)
+                              self.hr, rotation, friction, rolling, SOLVE_TOL)
         self.sweeps = sweeps
         return worst
 

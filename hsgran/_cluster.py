@@ -1,0 +1,659 @@
+"""Touching spheres and walls solved together: the cluster treatment of dense scenes (layer 5;
+compiled kernels used by :mod:`hsgran._loop`, with gravity and ``[enduring_contact] treatment =
+"clusters"``). What it does and what it costs is in docs/enduring-contact.md ("Clusters of
+contacts").
+
+A collision under gravity whose spheres touch nothing else, in flight, is the paper's binary
+collision (the caller's). Otherwise the event's spheres and every body touching them are a
+cluster (:func:`gather`), and at the event's instant:
+
+1. **impulses** (Moreau 1988; Jean 1999): all contacts of the cluster at once, each with
+   Newton's restitution (the pair's e_n from the collision model, MODEL §3, for an approach
+   faster than the landing speed; 0 for a slower one: the contact persists) and a Coulomb cone
+   (MODEL §4's μ_s; rolling couples with μ_r, MODEL §5.1), by
+   :func:`hsgran.contact.cluster.solve`. Afterwards no contact of the cluster approaches;
+2. **one step of contact dynamics** over the next segment, of length h (:func:`_step_time`):
+   the contacts that persist (no longer separating) take the impulses of one Moreau–Jean step
+   under gravity, with the same cones, so that none approaches at the step's end; the
+   velocity change over h gives each body constant accelerations for the segment (the
+   piecewise-constant accelerations of Baraff's event-driven resting contact, found at the
+   velocity level, where the solver converges also where sliding contacts would make the
+   force-level problem diverge);
+3. **motion states**: a sphere slower than the landing speed that its supports hold still at
+   the step's end comes to rest; one whose only persisting contact is a plane takes the
+   paper's motion on a plate (MODEL §5.3); one without persisting contacts flies; any other
+   moves with the step's accelerations (``MS_SUPPORTED``) until its segment ends, when its
+   cluster is solved again. A sphere at rest set moving wakes the resting spheres it
+   touches, which are solved again at once.
+
+Over a segment, the normal velocity of a persisting contact moves linearly from its value now
+(≥ 0, up to the solver's tolerance) to its value at the step's end (≥ 0), so the contact never
+closes: the prediction skips
+a touching pair with a supported sphere whose normal velocity stays above −``Space.slack``
+(the solver's tolerance) until the segment ends (:func:`hsgran._predict.held_apart`). No
+zero-time sequence follows a solve.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from hsgran._flight import (
+    TOUCH_REL,
+    advance,
+    enter_plane,
+    halt,
+    leave_plane,
+    min_image,
+    plane_gap,
+    state_at,
+)
+from hsgran._jit import njit
+from hsgran._predict import cell_heads, reschedule_fn
+from hsgran._state import (
+    F_CLUSTER_LOSS,
+    F_LANDING_SPEED,
+    FL_ADHESION,
+    FL_FRICTION,
+    FL_PLASTICITY,
+    FL_ROLLING,
+    FL_ROTATION,
+    I_SHORT,
+    I_SWEEPS,
+    I_UNSOLVED,
+    S_R,
+)
+from hsgran.contact.cluster import solve
+from hsgran.contact.model import (
+    REC_CAPTURED,
+    REC_E_N,
+    REC_ENERGY_LOST,
+    REC_J_N,
+    REC_J_T,
+    REC_REGIME,
+    REC_STAGE,
+    resolve,
+)
+from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S
+from hsgran.motion import NEVER
+from hsgran.onplane import END_NONE, END_RESOLVE, MS_FLIGHT, MS_REST, MS_SUPPORTED
+
+#: A segment of constant accelerations lasts until a contact between spheres has moved
+#: tangentially by this fraction of σ [-]: the contact normal then turns by 1e-4 rad and the
+#: spheres, which move along the tangent, lift off each other by 5e-9 σ; the cluster is then
+#: solved again from the new normals.
+CURVATURE_REL = 1e-4
+#: Longest segment [s]: even a cluster whose contacts do not slide is solved again this often,
+#: which bounds what the solver's tolerance can add up to (slack × MAX_SEGMENT = 1e-13 m of
+#: overlap with the default landing speed).
+MAX_SEGMENT = 1e-3
+#: Shortest segment, relative to max(1 s, t) [-]: 1e4 times the collapse guard's "one instant"
+#: (hsgran._flight.NO_PROGRESS_REL), so that every solve of a segment's end advances the clock.
+MIN_SEGMENT_REL = 1e-9
+#: Slack of the prediction for supported spheres, relative to the landing speed [-] (1e-10 m/s
+#: with the default): above what the solver leaves (SOLVE_TOL_REL of it), below anything that
+#: moves a sphere measurably within MAX_SEGMENT (1e-13 m).
+SLACK_V_REL = 1e-7
+#: The solves converge to this fraction of the slack (each contact's velocity, or acceleration,
+#: within it of its target, and no impulse changing by more than that in a sweep) [-]: what
+#: is left over is then below what the prediction forgives.
+SOLVE_TOL_REL = 0.01
+#: A contact slips when its slip speed exceeds this fraction of the landing speed [-] (below:
+#: static friction); the same for rolling (R* times the rolling angular velocity). 1e-7 m/s
+#: with the default landing speed: slower slips stop within a segment.
+SLIP_REL = 1e-4
+#: A sphere comes to rest when, besides being slower than the landing speed, its acceleration
+#: and R times its angular acceleration are below this fraction of |g| [-]: far above the
+#: residual of a converged force solve (~1e-12 |g|).
+REST_ACC_REL = 1e-6
+#: An impact (faster than the landing speed) moves the resting spheres up to this many contacts
+#: away from the event's spheres (a row of five, Newton's cradle, in full); resting spheres
+#: further away are immovable. A slower meeting moves none: a pile at rest carries it
+#: (docs/enduring-contact.md). Moving spheres are always part of the cluster: held as a
+#: boundary moving as before, they could squeeze a body between them and a wall.
+REST_DEPTH = 4
+#: Target of a contact left out of the force solve (it separates): no force can act.
+NO_CONTACT = -1e300
+
+CL_ISOLATED = 0  #: the event's spheres touch nothing else in flight: a binary collision
+CL_SOLVED = 1  #: the cluster was solved
+#: Stage code of a collision solved in a cluster (event log; the normal model's are ≥ 0).
+STAGE_CLUSTER = -2
+
+
+@njit
+def _add_body(q, depth, t, flight, dyn, clus, nb, rotation):
+    """Make sphere q (advanced to t) the cluster's body nb."""
+    st, omg = flight.st, dyn.omg
+    advance(st, flight.acc, omg, dyn.alpha, q, t, True, rotation)
+    clus.cl_loc[q] = nb
+    clus.cl_body[nb] = q
+    clus.cl_was[nb] = flight.mstate[q]
+    clus.cl_depth[nb] = depth
+    clus.cl_inv_m[nb] = dyn.inv_m[q]
+    clus.cl_inv_i[nb] = dyn.inv_i[q]
+    clus.cl_rad[nb] = st[q, S_R]
+    for k in range(3):
+        clus.cl_v[nb, k] = st[q, 3 + k]
+        clus.cl_w[nb, k] = omg[q, k] if rotation else 0.0
+    return nb + 1
+
+
+@njit(inline="always")
+def _add_contact(clus, nc, a, b, q, mat, nx, ny, nz, rb):
+    """Contact nc between body a and body b (−1: immovable, partner q; −1 − w for plane w)."""
+    clus.ck_a[nc] = a
+    clus.ck_b[nc] = b
+    clus.ck_q[nc] = q
+    clus.ck_mat[nc] = mat
+    clus.ck_n[nc, 0] = nx
+    clus.ck_n[nc, 1] = ny
+    clus.ck_n[nc, 2] = nz
+    clus.ck_rb[nc] = rb
+    for k in range(3):
+        clus.ck_vb[nc, k] = 0.0
+        clus.ck_ab[nc, k] = 0.0
+    return nc + 1
+
+
+@njit
+def _boundary_motion(q, c, nx, ny, nz, t, flight, dyn, clus, rotation):
+    """Velocity and acceleration of the contact point of immovable sphere q (n from q to the
+    body) into contact c: a sphere at rest has none; a moving sphere beyond the cluster keeps
+    its own (centripetal terms left out)."""
+    st, acc = flight.st, flight.acc
+    if flight.mstate[q] == MS_REST:
+        return
+    _, _, _, u, v, w = state_at(st, acc, q, t, True)
+    rq = st[q, S_R]
+    clus.ck_vb[c, 0], clus.ck_vb[c, 1], clus.ck_vb[c, 2] = u, v, w
+    for k in range(3):
+        clus.ck_ab[c, k] = acc[q, k]
+    if rotation:
+        om = dyn.omg[q]
+        al = dyn.alpha[q]
+        dt = t - st[q, 6]
+        ox, oy, oz = om[0] + al[0] * dt, om[1] + al[1] * dt, om[2] + al[2] * dt
+        clus.ck_vb[c, 0] += rq * (oy * nz - oz * ny)
+        clus.ck_vb[c, 1] += rq * (oz * nx - ox * nz)
+        clus.ck_vb[c, 2] += rq * (ox * ny - oy * nx)
+        clus.ck_ab[c, 0] += rq * (al[1] * nz - al[2] * ny)
+        clus.ck_ab[c, 1] += rq * (al[2] * nx - al[0] * nz)
+        clus.ck_ab[c, 2] += rq * (al[0] * ny - al[1] * nx)
+
+
+# long: one breadth-first walk over the touching bodies; its cell scan, plane scan and the
+# three kinds of partner (a body, a new body, the boundary) share the walk's state
+@njit
+def gather(s1, s2, t, fast, flight, dyn, walls, space, grid, clus, rotation):
+    """The cluster of sphere s1 (and s2, or −1): every body touching them, and every moving
+    sphere touching those, breadth first; in an impact (``fast``: faster than the landing
+    speed) also the resting spheres up to REST_DEPTH contacts away, through which its impulse
+    travels. Other spheres at rest and planes are immovable partners, moving spheres beyond
+    the room of the scratch arrays the cluster's boundary. Returns (bodies, contacts); the
+    bodies are advanced to t."""
+    st, acc, mstate, mat = flight.st, flight.acc, flight.mstate, dyn.mat
+    planes_p, planes_n, planes_mat = walls.planes_p, walls.planes_n, walls.planes_mat
+    box_len, periodic, nxt = space.box_len, space.periodic, grid.nxt
+    loc = clus.cl_loc
+    max_b = clus.cl_body.shape[0]
+    max_c = clus.ck_a.shape[0]
+    nb = _add_body(s1, 0, t, flight, dyn, clus, 0, rotation)
+    if s2 >= 0:
+        nb = _add_body(s2, 0, t, flight, dyn, clus, nb, rotation)
+    nc = 0
+    p = 0
+    while p < nb:
+        s = clus.cl_body[p]
+        rs = st[s, S_R]
+        for w in range(planes_p.shape[0]):
+            gap = plane_gap(st[s, 0], st[s, 1], st[s, 2], rs, planes_p, planes_n, w)
+            if gap <= TOUCH_REL * rs and nc < max_c:
+                nc = _add_contact(clus, nc, p, -1, -1 - w, planes_mat[w], planes_n[w, 0],
+                                  planes_n[w, 1], planes_n[w, 2], 0.0)
+                for k in range(3):
+                    clus.ck_vb[nc - 1, k] = walls.planes_vel[w, k]
+        for h in range(cell_heads(s, grid, space)):
+            q = np.int64(grid.heads[h])
+            while q >= 0:
+                lq = loc[q]
+                if q != s and (lq < 0 or lq > p):
+                    xq, yq, zq, _, _, _ = state_at(st, acc, q, t, True)
+                    dx = min_image(st[s, 0] - xq, 0, box_len, periodic)
+                    dy = min_image(st[s, 1] - yq, 1, box_len, periodic)
+                    dz = min_image(st[s, 2] - zq, 2, box_len, periodic)
+                    sigma = rs + st[q, S_R]
+                    d = math.sqrt(dx * dx + dy * dy + dz * dz)
+                    if d - sigma <= TOUCH_REL * sigma and nc < max_c:
+                        nx, ny, nz = dx / d, dy / d, dz / d
+                        if (lq < 0 and nb < max_b and (mstate[q] != MS_REST or (
+                                fast and clus.cl_depth[p] < REST_DEPTH))):
+                            lq = nb
+                            nb = _add_body(q, clus.cl_depth[p] + 1, t, flight, dyn,
+                                           clus, nb, rotation)
+                        if lq >= 0:
+                            nc = _add_contact(clus, nc, p, lq, q, mat[q], nx, ny, nz,
+                                              st[q, S_R])
+                        else:
+                            nc = _add_contact(clus, nc, p, -1, q, mat[q], nx, ny, nz,
+                                              st[q, S_R])
+                            _boundary_motion(q, nc - 1, nx, ny, nz, t, flight, dyn,
+                                             clus, rotation)
+                q = np.int64(nxt[q])
+        p += 1
+    return nb, nc
+
+
+@njit
+def release(nb, clus):
+    """Forget the cluster's bodies (the sphere-to-body map back to −1)."""
+    for b in range(nb):
+        clus.cl_loc[clus.cl_body[b]] = -1
+
+
+@njit
+def _kinetic(nb, clus, rotation):
+    """Kinetic energy of the cluster's bodies [J]."""
+    e = 0.0
+    for b in range(nb):
+        v2 = clus.cl_v[b, 0] ** 2 + clus.cl_v[b, 1] ** 2 + clus.cl_v[b, 2] ** 2
+        e += 0.5 * v2 / clus.cl_inv_m[b]
+        if rotation:
+            w2 = clus.cl_w[b, 0] ** 2 + clus.cl_w[b, 1] ** 2 + clus.cl_w[b, 2] ** 2
+            e += 0.5 * w2 / clus.cl_inv_i[b]
+    return e
+
+
+@njit(inline="always")
+def _normal_velocity(c, clus):
+    """Relative normal velocity of contact c [m/s] (spins do not enter: the contact points lie
+    on the normal)."""
+    a = clus.ck_a[c]
+    b = clus.ck_b[c]
+    u = 0.0
+    for k in range(3):
+        vb = clus.cl_v[b, k] if b >= 0 else clus.ck_vb[c, k]
+        u += (clus.cl_v[a, k] - vb) * clus.ck_n[c, k]
+    return u
+
+
+@njit
+def _restitution(c, clus, row, rec, flags):
+    """Normal restitution of contact c as a binary collision of its two bodies (MODEL §3, the
+    pair's row; an immovable partner as a wall of infinite mass) [-]."""
+    if row[P_E_FIXED] >= 0.0:
+        return row[P_E_FIXED]
+    a = clus.ck_a[c]
+    b = clus.ck_b[c]
+    v1, w1, v2, w2 = clus.ck_slip[c], clus.ck_rslip[c], clus.ck_pt[c], clus.ck_hr[c]
+    for k in range(3):
+        v1[k] = clus.cl_v[a, k]
+        w1[k] = 0.0
+        v2[k] = clus.cl_v[b, k] if b >= 0 else clus.ck_vb[c, k]
+        w2[k] = 0.0
+    r1 = clus.cl_rad[a]
+    r2 = clus.ck_rb[c]
+    curv = 1.0 / r1 + (1.0 / r2 if r2 > 0.0 else 0.0)
+    resolve(v1, w1, v2, w2, clus.ck_n[c, 0], clus.ck_n[c, 1], clus.ck_n[c, 2],
+            clus.cl_inv_m[a], clus.cl_inv_m[b] if b >= 0 else 0.0, 0.0, 0.0, r1, r2, curv, row,
+            rec, flags[FL_PLASTICITY], False, False, flags[FL_ADHESION], False, False)
+    if rec[REC_CAPTURED] > 0.0:
+        return 0.0
+    return rec[REC_E_N]
+
+
+@njit(inline="always")
+def _cold(c, clus):
+    """Contact c starts a solve from no impulse, with static friction and rolling (no kinetic
+    directions)."""
+    clus.ck_pn[c] = 0.0
+    for k in range(3):
+        clus.ck_pt[c, k] = 0.0
+        clus.ck_hr[c, k] = 0.0
+        clus.ck_slip[c, k] = 0.0
+        clus.ck_rslip[c, k] = 0.0
+
+
+@njit
+def _impact_setup(nc, clus, pair_table, mat, rec, fsc, flags):
+    """Targets, friction and rolling coefficients of the impulse solve (MODEL §3, §4, §5.1):
+    an approach faster than the landing speed rebounds with the pair's e_n, a slower one not
+    at all."""
+    v_land = fsc[F_LANDING_SPEED]
+    for c in range(nc):
+        a = clus.ck_a[c]
+        row = pair_table[mat[clus.cl_body[a]], clus.ck_mat[c]]
+        un = _normal_velocity(c, clus)
+        e = 0.0
+        if un < -v_land:
+            e = _restitution(c, clus, row, rec, flags)
+        clus.ck_tgt[c] = -e * un if un < 0.0 else 0.0
+        clus.ck_mu[c] = row[P_MU_S]
+        clus.ck_mur[c] = row[P_MU_R]
+        r1 = clus.cl_rad[a]
+        r2 = clus.ck_rb[c]
+        clus.ck_reff[c] = r1 * r2 / (r1 + r2) if r2 > 0.0 else r1
+        _cold(c, clus)
+
+
+@njit
+def _step_time(nb, nc, clus, gravity, t):
+    """Length of the next segment of constant accelerations [s]: until a contact between
+    spheres could have moved along its tangent by CURVATURE_REL σ, at the present relative
+    speed or from rest under 2|g| (the normal then turns by 1e-4 rad, and the spheres, which
+    move along the tangent, lift off each other by 5e-9 σ); at most MAX_SEGMENT, at least
+    MIN_SEGMENT_REL × max(1 s, t)."""
+    g2 = 2.0 * math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    tau = MAX_SEGMENT
+    for c in range(nc):
+        if clus.ck_tgt[c] == NO_CONTACT or clus.ck_rb[c] == 0.0:
+            continue  # separating, or flat
+        a = clus.ck_a[c]
+        b = clus.ck_b[c]
+        room = CURVATURE_REL * (clus.cl_rad[a] + clus.ck_rb[c])
+        v2 = 0.0
+        for k in range(3):
+            v2 += (clus.cl_v[a, k] - (clus.cl_v[b, k] if b >= 0 else clus.ck_vb[c, k])) ** 2
+        if v2 > 0.0:
+            tau = min(tau, room / math.sqrt(v2))
+        if g2 > 0.0:
+            tau = min(tau, math.sqrt(2.0 * room / g2))
+    return max(tau, MIN_SEGMENT_REL * max(1.0, t))
+
+
+@njit
+def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation):
+    """The step problem of the contacts that persist (Moreau–Jean over one segment of length h
+    [s]): each body's velocity at the segment's end without contacts (v + h g, in ``cl_a``;
+    spin in ``cl_al``); a persisting contact (separating after the impulses slower than
+    ``v_persist`` [m/s], the landing speed: gravity would bring it back at once) must not
+    approach at the end (target 0; its normal velocity then stays ≥ 0 over the segment, so
+    it never closes); a contact separating faster takes nothing. Returns the number of
+    persisting contacts."""
+    persist = 0
+    for b in range(nb):
+        for k in range(3):
+            clus.cl_a[b, k] = clus.cl_v[b, k] + h * gravity[k]
+            clus.cl_al[b, k] = clus.cl_w[b, k] if rotation else 0.0
+    for c in range(nc):
+        un = _normal_velocity(c, clus)
+        clus.ck_un[c] = un
+        _cold(c, clus)
+        for k in range(3):
+            # an immovable partner's velocity at the segment's end
+            clus.ck_ab[c, k] = clus.ck_vb[c, k] + h * clus.ck_ab[c, k]
+        if un > v_persist:
+            clus.ck_tgt[c] = NO_CONTACT
+        else:
+            persist += 1
+            clus.ck_tgt[c] = 0.0
+    return persist
+
+
+@njit
+def _accelerations(nb, h, clus):
+    """Turn the step's end velocities (``cl_a``, ``cl_al``) into the segment's constant
+    accelerations [m/s², rad/s²]."""
+    for b in range(nb):
+        for k in range(3):
+            clus.cl_a[b, k] = (clus.cl_a[b, k] - clus.cl_v[b, k]) / h
+            clus.cl_al[b, k] = (clus.cl_al[b, k] - clus.cl_w[b, k]) / h
+
+
+@njit
+def _rest_candidates(nb, nc, h, clus, fsc, gravity):
+    """Mark in ``cl_depth`` (−1) the bodies that come to rest: slower than the landing speed
+    now (what is given up), at a standstill at the step's end (below SLIP_REL × the landing
+    speed, R × spin included: their supports hold them), and not resting on a body that goes
+    on moving (a persisting contact below them)."""
+    v_land = fsc[F_LANDING_SPEED]
+    v_still = SLIP_REL * v_land
+    for b in range(nb):
+        r = clus.cl_rad[b]
+        v2 = clus.cl_v[b, 0] ** 2 + clus.cl_v[b, 1] ** 2 + clus.cl_v[b, 2] ** 2
+        w2 = (clus.cl_w[b, 0] ** 2 + clus.cl_w[b, 1] ** 2 + clus.cl_w[b, 2] ** 2) * r * r
+        e2 = e3 = 0.0  # at the step's end
+        for k in range(3):
+            e2 += (clus.cl_v[b, k] + h * clus.cl_a[b, k]) ** 2
+            e3 += (clus.cl_w[b, k] + h * clus.cl_al[b, k]) ** 2 * r * r
+        if v2 <= v_land * v_land and w2 <= v_land * v_land and e2 <= v_still * v_still \
+                and e3 <= v_still * v_still:
+            clus.cl_depth[b] = -1
+    # a body rests only on supports that rest too: a persisting contact from below (its normal
+    # towards the body points up) with a body that moves, or a moving boundary, keeps it going
+    changed = True
+    while changed:
+        changed = False
+        for c in range(nc):
+            if clus.ck_tgt[c] == NO_CONTACT:
+                continue
+            a = clus.ck_a[c]
+            b = clus.ck_b[c]
+            up = -(clus.ck_n[c, 0] * gravity[0] + clus.ck_n[c, 1] * gravity[1]
+                   + clus.ck_n[c, 2] * gravity[2])  # > 0: b is below a
+            moving_b = (clus.cl_depth[b] >= 0) if b >= 0 else (
+                clus.ck_vb[c, 0] != 0.0 or clus.ck_vb[c, 1] != 0.0 or clus.ck_vb[c, 2] != 0.0
+                or clus.ck_ab[c, 0] != 0.0 or clus.ck_ab[c, 1] != 0.0
+                or clus.ck_ab[c, 2] != 0.0)
+            if up > 0.0 and clus.cl_depth[a] < 0 and moving_b:
+                clus.cl_depth[a] = 0
+                changed = True
+            if up < 0.0 and b >= 0 and clus.cl_depth[b] < 0 and clus.cl_depth[a] >= 0:
+                clus.cl_depth[b] = 0
+                changed = True
+
+
+@njit
+def _support(b, nc, clus):
+    """The persisting contact of body b with the largest force: its plane w (as w) or sphere q
+    (as −2 − q), for the motion state's ``mplane``; and how many persisting contacts b has and
+    the plane of the last one (−1 if it is not a plane)."""
+    best = -1.0
+    code = -1
+    count = 0
+    plane = -1
+    for c in range(nc):
+        if clus.ck_tgt[c] == NO_CONTACT:
+            continue
+        a = clus.ck_a[c]
+        bb = clus.ck_b[c]
+        if a != b and bb != b:
+            continue
+        count += 1
+        q = clus.ck_q[c] if a == b else clus.cl_body[a]
+        plane = -1 - q if q < 0 else -1
+        if clus.ck_pn[c] > best:
+            best = clus.ck_pn[c]
+            code = -1 - q if q < 0 else -2 - q
+    return code, count, plane
+
+
+@njit
+def _wake(s, t, flight, walls, space, grid, sched, clus, isc):
+    """Sphere s, at rest before the solve, moves: the resting spheres it touches (outside the
+    cluster) are solved again at once, since s may have carried them."""
+    st, mstate = flight.st, flight.mstate
+    box_len, periodic = space.box_len, space.periodic
+    woken = 0  # (re-predicted after the walk: a prediction overwrites grid.heads)
+    for h in range(cell_heads(s, grid, space)):
+        q = np.int64(grid.heads[h])
+        while q >= 0:
+            if q != s and mstate[q] == MS_REST and clus.cl_loc[q] < 0 \
+                    and flight.seg_code[q] != END_RESOLVE:
+                dx = min_image(st[s, 0] - st[q, 0], 0, box_len, periodic)
+                dy = min_image(st[s, 1] - st[q, 1], 1, box_len, periodic)
+                dz = min_image(st[s, 2] - st[q, 2], 2, box_len, periodic)
+                sigma = st[s, S_R] + st[q, S_R]
+                if math.sqrt(dx * dx + dy * dy + dz * dz) - sigma <= TOUCH_REL * sigma:
+                    flight.seg_end[q] = t
+                    flight.seg_code[q] = END_RESOLVE
+                    grid.stack[woken] = q
+                    woken += 1
+            q = np.int64(grid.nxt[q])
+    for k in range(woken):
+        reschedule_fn(np.int64(grid.stack[k]), t, flight, walls, space, grid, sched, isc, True)
+
+
+# long: the motion state of each body after a solve (rest, flight, the paper's plate, or
+# supported) writes the same dozen arrays in four ways; split, each would take them all
+@njit
+def _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, isc,
+                  pair_table, fsc, flags):
+    """Write the solve's velocities and motion states back to the spheres, re-predict them and
+    wake what they carried; returns the kinetic energy given up by the spheres put to rest
+    [J]."""
+    rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
+    st, acc, mstate, mplane = flight.st, flight.acc, flight.mstate, flight.mplane
+    omg, alpha = dyn.omg, dyn.alpha
+    gravity = space.gravity
+    given_up = 0.0
+    for b in range(nb):
+        s = clus.cl_body[b]
+        for k in range(3):
+            st[s, 3 + k] = clus.cl_v[b, k]
+            if rotation:
+                omg[s, k] = clus.cl_w[b, k]
+        code, count, plane = _support(b, nc, clus)
+        if clus.cl_depth[b] < 0:  # at rest on its supports (_rest_candidates)
+            given_up += 0.5 * (st[s, 3] ** 2 + st[s, 4] ** 2 + st[s, 5] ** 2) / dyn.inv_m[s]
+            if rotation:
+                given_up += 0.5 * (omg[s, 0] ** 2 + omg[s, 1] ** 2 + omg[s, 2] ** 2) \
+                    / dyn.inv_i[s]
+            halt(s, st, omg, rotation)
+            for k in range(3):
+                acc[s, k] = 0.0
+                if rotation:
+                    alpha[s, k] = 0.0
+            mstate[s] = MS_REST
+            mplane[s] = code
+            flight.seg_end[s] = NEVER
+            flight.seg_code[s] = END_NONE
+        elif count == 1 and plane >= 0:  # on one plane only: the paper's plate (MODEL §5.3)
+            leave_plane(s, flight, dyn, gravity, rotation)
+            enter_plane(s, np.int64(plane), t, np.int64(END_NONE), flight, dyn, walls, gravity,
+                        pair_table, fsc, friction, rolling, rotation)
+        elif count == 0:
+            leave_plane(s, flight, dyn, gravity, rotation)
+            mplane[s] = -1
+        else:
+            mstate[s] = MS_SUPPORTED
+            mplane[s] = -1
+            for k in range(3):
+                acc[s, k] = clus.cl_a[b, k]
+                if rotation:
+                    alpha[s, k] = clus.cl_al[b, k]
+            flight.seg_end[s] = t + tau
+            flight.seg_code[s] = END_RESOLVE
+        flight.counter[s] += 1
+    for b in range(nb):
+        reschedule_fn(clus.cl_body[b], t, flight, walls, space, grid, sched, isc, True)
+    for b in range(nb):
+        s = clus.cl_body[b]
+        if clus.cl_was[b] == MS_REST and mstate[s] != MS_REST:
+            _wake(s, t, flight, walls, space, grid, sched, clus, isc)
+    return given_up
+
+
+@njit
+def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
+           rec, flags):
+    """Impulses, forces and motion states of a gathered cluster (see the module); the impulse
+    of contact ``seed`` (or −1) goes to ``rec`` for the event log. Returns the energy the
+    cluster took [J] (the impulses' loss and what the spheres put to rest gave up)."""
+    rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
+    e0 = _kinetic(nb, clus, rotation)
+    _impact_setup(nc, clus, pair_table, dyn.mat, rec, fsc, flags)
+    sweeps, _ = solve(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, clus.ck_vb, clus.ck_tgt,
+                      clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip,
+                      clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, clus.cl_v, clus.cl_w,
+                      clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation, friction, rolling,
+                      SOLVE_TOL_REL * space.slack[0])
+    for k in range(rec.shape[0]):
+        rec[k] = math.nan
+    rec[REC_J_N] = clus.ck_pn[seed] if seed >= 0 else 0.0
+    rec[REC_J_T] = math.sqrt(clus.ck_pt[seed, 0] ** 2 + clus.ck_pt[seed, 1] ** 2
+                             + clus.ck_pt[seed, 2] ** 2) if seed >= 0 else 0.0
+    rec[REC_STAGE] = STAGE_CLUSTER
+    rec[REC_REGIME] = nb
+    loss = e0 - _kinetic(nb, clus, rotation)
+    isc[I_SWEEPS] += sweeps
+    h = _step_time(nb, nc, clus, space.gravity, t)
+    if h <= MIN_SEGMENT_REL * max(1.0, t):
+        isc[I_SHORT] += 1
+    _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation)
+    sweeps, worst = solve(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, clus.ck_ab,
+                          clus.ck_tgt, clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff,
+                          clus.ck_rslip, clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, clus.cl_a,
+                          clus.cl_al, clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation, friction,
+                          rolling, SOLVE_TOL_REL * space.slack[0])
+    isc[I_SWEEPS] += sweeps
+    if worst > space.slack[0]:
+        isc[I_UNSOLVED] += 1
+    _accelerations(nb, h, clus)
+    _rest_candidates(nb, nc, h, clus, fsc, space.gravity)
+    loss += _apply_states(nb, nc, t, h, flight, dyn, walls, space, grid, sched, clus, isc,
+                          pair_table, fsc, flags)
+    fsc[F_CLUSTER_LOSS] += loss
+    rec[REC_ENERGY_LOST] = loss
+    return loss
+
+
+@njit(inline="always")
+def _seed_contact(nc, clus, j, w):
+    """The contact of the event: with body 1 (sphere j ≥ 0) or with plane w."""
+    for c in range(nc):
+        if clus.ck_a[c] == 0 and ((j >= 0 and clus.ck_b[c] == 1) or (j < 0 and
+                                                                      clus.ck_q[c] == -1 - w)):
+            return c
+    return -1
+
+
+@njit
+def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table,
+                      fsc, rec, flags):
+    """A collision of sphere i with sphere j (j ≥ 0) or plane w at time t [s] under gravity:
+    CL_ISOLATED if the two touch nothing else and fly (the caller collides them as a pair;
+    nothing has changed but the spheres' stored states, advanced to t), else the cluster is
+    solved (CL_SOLVED; ``rec`` holds the event's impulse and the energy taken)."""
+    mstate, st, v_land = flight.mstate, flight.st, fsc[F_LANDING_SPEED]
+    if j >= 0:
+        un = 0.0
+        d = 0.0
+        for k in range(3):
+            dk = min_image(st[i, k] - st[j, k], k, space.box_len, space.periodic)
+            un += dk * (st[i, 3 + k] - st[j, 3 + k])
+            d += dk * dk
+        un /= math.sqrt(d)
+    else:
+        un = (st[i, 3] * walls.planes_n[w, 0] + st[i, 4] * walls.planes_n[w, 1]
+              + st[i, 5] * walls.planes_n[w, 2])
+    nb, nc = gather(i, j, t, un < -v_land, flight, dyn, walls, space, grid, clus,
+                    flags[FL_ROTATION])
+    if (nc == 1 and nb == (2 if j >= 0 else 1) and mstate[i] == MS_FLIGHT
+            and (j < 0 or mstate[j] == MS_FLIGHT)):
+        release(nb, clus)
+        return CL_ISOLATED
+    seed = _seed_contact(nc, clus, j, w)
+    _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
+           rec, flags)
+    release(nb, clus)
+    return CL_SOLVED
+
+
+@njit
+def cluster_resolve(i, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
+                    rec, flags):
+    """Sphere i's segment has ended (or a support of it moved): solve its cluster again at
+    time t [s]. Returns the energy taken [J]."""
+    nb, nc = gather(i, -1, t, False, flight, dyn, walls, space, grid, clus, flags[FL_ROTATION])
+    loss = _solve(nb, nc, -1, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table,
+                  fsc, rec, flags)
+    release(nb, clus)
+    return loss
+
+
+def slack(landing_speed: float) -> float:
+    """The prediction's slack for supported spheres (``Space.slack``) [m/s]."""
+    return SLACK_V_REL * landing_speed

@@ -1,0 +1,130 @@
+"""The cluster treatment of touching bodies (``[enduring_contact] treatment = "clusters"``,
+hsgran._cluster; docs/enduring-contact.md, "Clusters of contacts") in the engine, against
+closed forms: a sphere at rest in a V groove, rolling down a tilted groove, sliding into a
+corner, a stack of spheres on a plate, and Newton's cradle of five on a plate."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hsgran.engine import Simulation
+from hsgran.onplane import MS_REST
+from hsgran.scene import parse_scene
+from tests.scenes import FLOOR, num, plane, sphere
+
+R = 0.001  #: sphere radius of the scenes [m]
+G = 9.81
+
+HEAD = """
+[scene]
+name = "cluster case"
+duration = {duration}
+gravity = [{gravity}]
+effects = [{effects}]
+[output]
+frame_interval = {duration}
+[enduring_contact]
+treatment = "clusters"
+[[contacts]]
+between = ["steel", "steel"]
+sliding_friction = {mu}
+restitution = {e}
+"""
+
+
+def scene(body, duration=0.2, gravity=(0.0, 0.0, -G), mu=0.3, e=0.5,
+          effects='"gravity", "rotation", "friction"'):
+    return parse_scene(HEAD.format(duration=duration, gravity=", ".join(num(g) for g in gravity),
+                                   effects=effects, mu=mu, e=e) + body)
+
+
+def groove(beta):
+    """Two planes meeting along the x axis, normals at β from the vertical."""
+    s, c = num(math.sin(beta)), num(math.cos(beta))
+    return (plane(("0.0", "0.0", "0.0"), ("0.0", s, c))
+            + plane(("0.0", "0.0", "0.0"), ("0.0", "-" + s, c)))
+
+
+@pytest.mark.parametrize("beta_deg", [30.0, 45.0, 60.0])
+def test_sphere_dropped_into_a_v_groove_comes_to_rest_at_its_bottom(beta_deg):
+    """Dropped off-centre into a V groove, the sphere bounces and comes to rest touching both
+    planes: centre above the groove's line at R / cos β."""
+    b = math.radians(beta_deg)
+    sim = Simulation(scene(groove(b) + sphere(("0.0", num(0.3 * R), num(3 * R)))))
+    sim.run()
+    assert sim.mstate[0] == MS_REST
+    np.testing.assert_allclose(sim.vel[0], 0.0, atol=0.0)
+    np.testing.assert_allclose(sim.pos[0], (0.0, 0.0, R / math.cos(b)), atol=1e-9 * R)
+
+
+@pytest.mark.parametrize(("beta_deg", "theta_deg"), [(45.0, 5.0), (30.0, 10.0)])
+def test_sphere_rolls_down_a_tilted_groove_at_the_closed_form_acceleration(beta_deg, theta_deg):
+    """Placed touching both planes of a groove tilted by θ (gravity tilted instead), the sphere
+    rolls on both without slip: x = a t² / 2 with a = g sin θ / (1 + (2/5) / cos² β)."""
+    b = math.radians(beta_deg)
+    th = math.radians(theta_deg)
+    gravity = (G * math.sin(th), 0.0, -G * math.cos(th))
+    t = 0.1
+    sim = Simulation(scene(groove(b) + sphere(("0.0", "0.0", num(R / math.cos(b)))),
+                           duration=t, gravity=gravity, mu=0.9))
+    sim.run()
+    pos, vel = sim.state_at(t)
+    a = G * math.sin(th) / (1.0 + 0.4 / math.cos(b) ** 2)
+    assert pos[0, 0] == pytest.approx(0.5 * a * t * t, rel=1e-9)
+    assert vel[0, 0] == pytest.approx(a * t, rel=1e-9)
+    assert abs(pos[0, 1]) <= 1e-10 * R  # across the groove: rounding only
+    assert pos[0, 2] == pytest.approx(R / math.cos(b), rel=1e-12)
+
+
+def test_sphere_sliding_down_a_frictionless_slope_comes_to_rest_in_the_corner():
+    """A sphere let go on a frictionless slope (α) slides into the wall at its foot and rests
+    in the corner, touching both."""
+    al = math.radians(20.0)
+    slope = plane(("0.0", "0.0", "0.0"), (num(math.sin(al)), "0.0", num(math.cos(al))))
+    wall = plane(("0.02", "0.0", "0.0"), ("-1.0", "0.0", "0.0"))
+    x0 = 0.005
+    start = (x0 + R * math.sin(al), 0.0, -x0 * math.tan(al) + R * math.cos(al))
+    sim = Simulation(scene(slope + wall + sphere(tuple(num(c) for c in start)), duration=0.5,
+                           mu=0.0, effects='"gravity"'))
+    sim.run()
+    assert sim.mstate[0] == MS_REST
+    # the corner: R from the wall, R from the slope
+    xc = 0.02 - R
+    zc = (R - xc * math.sin(al)) / math.cos(al)
+    np.testing.assert_allclose(sim.pos[0], (xc, 0.0, zc), atol=1e-9 * R)
+
+
+def test_stack_of_three_on_a_plate_stays_at_rest():
+    """Three spheres stacked on a plate, touching, stay where they are."""
+    body = FLOOR + "".join(sphere(("0.0", "0.0", num((2 * k + 1) * R))) for k in range(3))
+    sim = Simulation(scene(body, duration=0.05))
+    p0 = sim.pos.copy()
+    sim.run()
+    np.testing.assert_allclose(sim.pos, p0, atol=1e-12 * R)
+    assert (sim.mstate == MS_REST).all()
+
+
+@pytest.mark.parametrize("e", [0.0, 0.5, 1.0])
+def test_newtons_cradle_of_five_on_a_frictionless_plate(e):
+    """Ball 0 slides at v into a row of four touching balls (0.1 mm away) on a frictionless
+    plate: solved
+    together (docs/enduring-contact.md), the row leaves at v(1 + e)/5 and ball 0 at
+    v(1 − 4e)/5 (hsgran.contact.cluster's closed form, tests/contact/test_cluster.py)."""
+    v = 0.1
+    body = FLOOR + sphere(("0.0", "0.0", num(R)), (num(v), "0.0", "0.0"))
+    body += "".join(sphere((num(1e-4 + 2 * R * k), "0.0", num(R))) for k in range(1, 5))
+    sim = Simulation(scene(body, duration=0.002, mu=0.0, e=e, effects='"gravity"'))
+    sim.run()
+    np.testing.assert_allclose(sim.vel[1:, 0], v * (1 + e) / 5, rtol=1e-9)
+    assert sim.vel[0, 0] == pytest.approx(v * (1 - 4 * e) / 5, abs=1e-9 * v)
+    np.testing.assert_allclose(sim.vel[:, 2], 0.0, atol=1e-12)
+
+
+def test_an_unknown_treatment_is_a_one_line_error_naming_the_key():
+    from hsgran.errors import InputError
+
+    text = HEAD.format(duration=0.1, gravity="0.0, 0.0, -9.81", effects='"gravity"', mu=0.3,
+                       e=0.5).replace('treatment = "clusters"', 'treatment = "soft"')
+    with pytest.raises(InputError, match=r"enduring_contact\.treatment.*'pairwise', 'clusters'"):
+        parse_scene(text + FLOOR + sphere(("0.0", "0.0", "0.002")))
