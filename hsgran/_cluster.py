@@ -393,6 +393,33 @@ def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation):
 
 
 @njit
+def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
+    """The step's solve with friction did not converge (Gauss–Seidel with Coulomb cones need
+    not): solve it again without friction and rolling couples, a convex problem on which
+    Gauss–Seidel converges; if that too stops short, the bodies keep their velocities over
+    the segment (no acceleration: gravity is left out for at most one segment). Either way no
+    contact closes within the segment, which a contact left approaching would (a zero-time
+    sequence). Counted in ``isc[I_UNSOLVED]``."""
+    for b in range(nb):
+        for k in range(3):
+            clus.cl_a[b, k] = clus.cl_v[b, k] + h * space.gravity[k]
+            clus.cl_al[b, k] = clus.cl_w[b, k] if rotation else 0.0
+    for c in range(nc):
+        _cold(c, clus)
+    sweeps, worst = solve(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, clus.ck_ab,
+                          clus.ck_tgt, clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff,
+                          clus.ck_rslip, clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, clus.cl_a,
+                          clus.cl_al, clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation, False,
+                          False, SOLVE_TOL_REL * space.slack[0])
+    isc[I_SWEEPS] += sweeps
+    if worst > space.slack[0]:
+        for b in range(nb):
+            for k in range(3):
+                clus.cl_a[b, k] = clus.cl_v[b, k]
+                clus.cl_al[b, k] = clus.cl_w[b, k]
+
+
+@njit
 def _accelerations(nb, h, clus):
     """Turn the step's end velocities (``cl_a``, ``cl_al``) into the segment's constant
     accelerations [m/s², rad/s²]."""
@@ -591,6 +618,7 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     isc[I_SWEEPS] += sweeps
     if worst > space.slack[0]:
         isc[I_UNSOLVED] += 1
+        _unsolved_step(nb, nc, h, clus, isc, space, rotation)
     _accelerations(nb, h, clus)
     _rest_candidates(nb, nc, h, clus, fsc, space.gravity)
     loss += _apply_states(nb, nc, t, h, flight, dyn, walls, space, grid, sched, clus, isc,
