@@ -64,6 +64,7 @@ from hsgran._state import (
     I_SWEEPS,
     I_UNSOLVED,
     S_R,
+    S_T,
 )
 from hsgran.contact.cluster import solve
 from hsgran.contact.model import (
@@ -174,7 +175,7 @@ def _boundary_motion(q, c, nx, ny, nz, t, flight, dyn, clus, rotation):
     if rotation:
         om = dyn.omg[q]
         al = dyn.alpha[q]
-        dt = t - st[q, 6]
+        dt = t - st[q, S_T]
         ox, oy, oz = om[0] + al[0] * dt, om[1] + al[1] * dt, om[2] + al[2] * dt
         clus.ck_vb[c, 0] += rq * (oy * nz - oz * ny)
         clus.ck_vb[c, 1] += rq * (oz * nx - ox * nz)
@@ -379,7 +380,6 @@ def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation):
             clus.cl_al[b, k] = clus.cl_w[b, k] if rotation else 0.0
     for c in range(nc):
         un = _normal_velocity(c, clus)
-        clus.ck_un[c] = un
         _cold(c, clus)
         for k in range(3):
             # an immovable partner's velocity at the segment's end
@@ -390,6 +390,17 @@ def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation):
             persist += 1
             clus.ck_tgt[c] = 0.0
     return persist
+
+
+@njit
+def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol):
+    """:func:`hsgran.contact.cluster.solve` on the cluster's contacts, with the bodies'
+    velocities (or the step's end velocities) ``v``, ``w`` and the immovable partners' ``vb``;
+    returns (sweeps, worst)."""
+    return solve(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, vb, clus.ck_tgt, clus.ck_mu,
+                 clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip, clus.cl_inv_m,
+                 clus.cl_inv_i, clus.cl_rad, v, w, clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation,
+                 friction, rolling, tol)
 
 
 @njit
@@ -406,11 +417,8 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
             clus.cl_al[b, k] = clus.cl_w[b, k] if rotation else 0.0
     for c in range(nc):
         _cold(c, clus)
-    sweeps, worst = solve(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, clus.ck_ab,
-                          clus.ck_tgt, clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff,
-                          clus.ck_rslip, clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, clus.cl_a,
-                          clus.cl_al, clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation, False,
-                          False, SOLVE_TOL_REL * space.slack[0])
+    sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation, False,
+                                   False, SOLVE_TOL_REL * space.slack[0])
     isc[I_SWEEPS] += sweeps
     if worst > space.slack[0]:
         for b in range(nb):
@@ -592,11 +600,8 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
     e0 = _kinetic(nb, clus, rotation)
     _impact_setup(nc, clus, pair_table, dyn.mat, rec, fsc, flags)
-    sweeps, _ = solve(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, clus.ck_vb, clus.ck_tgt,
-                      clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip,
-                      clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, clus.cl_v, clus.cl_w,
-                      clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation, friction, rolling,
-                      SOLVE_TOL_REL * space.slack[0])
+    sweeps, _ = _solve_cluster(nc, clus, clus.cl_v, clus.cl_w, clus.ck_vb, rotation, friction,
+                               rolling, SOLVE_TOL_REL * space.slack[0])
     for k in range(rec.shape[0]):
         rec[k] = math.nan
     rec[REC_J_N] = clus.ck_pn[seed] if seed >= 0 else 0.0
@@ -610,11 +615,8 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     if h <= MIN_SEGMENT_REL * max(1.0, t):
         isc[I_SHORT] += 1
     _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation)
-    sweeps, worst = solve(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, clus.ck_ab,
-                          clus.ck_tgt, clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff,
-                          clus.ck_rslip, clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, clus.cl_a,
-                          clus.cl_al, clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation, friction,
-                          rolling, SOLVE_TOL_REL * space.slack[0])
+    sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
+                                   friction, rolling, SOLVE_TOL_REL * space.slack[0])
     isc[I_SWEEPS] += sweeps
     if worst > space.slack[0]:
         isc[I_UNSOLVED] += 1

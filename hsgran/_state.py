@@ -59,11 +59,11 @@ Sched = namedtuple("Sched", "ev_t ev_seq ev_kind ev_partner ev_pcount cal")
 #: [1/kg], inverse moment of inertia [1/(kg m²)], radius [m]; velocities ``cl_v`` [m/s] and
 #: spins ``cl_w`` [rad/s], accelerations ``cl_a`` [m/s²] and ``cl_al`` [rad/s²]) and the
 #: contacts (``ck_*``: the arrays of hsgran.contact.cluster.solve, the partner ``ck_q`` (a
-#: sphere, or −1 − w for plane w), its material ``ck_mat``, the normal velocity after the
-#: impulses ``ck_un`` [m/s], and the immovable body's acceleration ``ck_ab`` [m/s²]).
+#: sphere, or −1 − w for plane w), its material ``ck_mat``, and the immovable body's
+#: acceleration ``ck_ab`` [m/s²]).
 Clus = namedtuple("Clus", "cl_body cl_loc cl_was cl_depth cl_inv_m cl_inv_i cl_rad cl_v cl_w "
                           "cl_a cl_al ck_a ck_b ck_q ck_mat ck_n ck_rb ck_vb ck_ab ck_tgt ck_mu "
-                          "ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr ck_un")
+                          "ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr")
 #: Output buffers: frame times [s], positions [m], velocities [m/s], spins [rad/s], the event
 #: log (floats ``log_f``: time, J_n, J_t, e_n; ints ``log_i``: kind, i, j, stage, regime) and
 #: motion states per frame.
@@ -316,7 +316,6 @@ FIELDS = (
     _f("Clus", "ck_pn", "f8", ("ck",)),
     _f("Clus", "ck_pt", "f8", ("ck", 3)),
     _f("Clus", "ck_hr", "f8", ("ck", 3)),
-    _f("Clus", "ck_un", "f8", ("ck",)),
     _f("Out", "fr_time", "f8", ("frames",)),
     _f("Out", "fr_pos", "f8", ("frames", "n", 3)),
     _f("Out", "fr_vel", "f8", ("frames", "n", 3)),
