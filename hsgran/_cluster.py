@@ -60,6 +60,7 @@ from hsgran._state import (
     FL_PLASTICITY,
     FL_ROLLING,
     FL_ROTATION,
+    FL_VISCOUS,
     I_SHORT,
     I_SWEEPS,
     I_UNSOLVED,
@@ -299,7 +300,8 @@ def _restitution(c, clus, row, rec, flags):
     curv = 1.0 / r1 + (1.0 / r2 if r2 > 0.0 else 0.0)
     resolve(v1, w1, v2, w2, clus.ck_n[c, 0], clus.ck_n[c, 1], clus.ck_n[c, 2],
             clus.cl_inv_m[a], clus.cl_inv_m[b] if b >= 0 else 0.0, 0.0, 0.0, r1, r2, curv, row,
-            rec, flags[FL_PLASTICITY], False, False, flags[FL_ADHESION], False, False)
+            rec, flags[FL_PLASTICITY], False, False, flags[FL_ADHESION], False, False, False,
+            flags[FL_VISCOUS])
     if rec[REC_CAPTURED] > 0.0:
         return 0.0
     return rec[REC_E_N]

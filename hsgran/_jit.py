@@ -6,7 +6,8 @@ Python (the tests run both ways), which is why kernels avoid numba-only construc
 Numba keys a cached function on its own source file only, but hsgran's kernels inline functions
 from other modules (the collision model into the event loop). An edit to ``contact/normal.py``
 would then leave a stale compiled loop behind. So the cache lives in a directory named after a
-hash of all hsgran sources: any change to the package starts a fresh cache. A user-set
+hash of all hsgran sources (and of the data tables kernels compile in as constants): any change
+to the package starts a fresh cache. A user-set
 ``NUMBA_CACHE_DIR`` is respected as it is.
 """
 
@@ -23,11 +24,18 @@ from numba import njit as _njit
 JIT_OPTIONS = {"cache": True, "nogil": True, "_nrt": False}
 
 
+#: Data files whose contents kernels compile in as constants (the effects' tables,
+#: hsgran.contact.compliance and hsgran.contact.viscous): part of the cache's key like sources.
+COMPILED_DATA = ("data/tangential_compliance.npz", "data/derived_viscoelastic_restitution.csv")
+
+
 def _source_digest() -> str:
-    """Hash of every ``.py`` file of the package (names and contents)."""
+    """Hash of every ``.py`` file of the package and of the COMPILED_DATA (names and
+    contents)."""
     root = Path(__file__).parent
     h = hashlib.sha1()
-    for path in sorted(root.rglob("*.py")):
+    data = [root / name for name in COMPILED_DATA if (root / name).is_file()]
+    for path in sorted(root.rglob("*.py")) + data:
         h.update(str(path.relative_to(root)).encode())
         h.update(path.read_bytes())
     return h.hexdigest()[:16]

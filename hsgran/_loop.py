@@ -68,12 +68,14 @@ from hsgran._state import (
     F_TC_TIME,
     FL_ADHESION,
     FL_CLUSTERS,
+    FL_COMPLIANCE,
     FL_FRICTION,
     FL_GRAVITY,
     FL_LOG,
     FL_PLASTICITY,
     FL_ROLLING,
     FL_ROTATION,
+    FL_VISCOUS,
     I_COLLAPSED,
     I_FRAME_INDEX,
     I_N_EVENTS,
@@ -356,7 +358,8 @@ def _pair_handler(grav_on):
                               st[j, S_V:S_V + 3], omg[j] if rotation else omg[0], nx, ny, nz,
                               dyn.inv_m[i], dyn.inv_m[j], dyn.inv_i[i], dyn.inv_i[j], ri, rj,
                               1.0 / ri + 1.0 / rj, row, rec, flags[FL_PLASTICITY], friction,
-                              rolling, flags[FL_ADHESION], rotation, False)
+                              rolling, flags[FL_ADHESION], rotation, False, flags[FL_COMPLIANCE],
+                              flags[FL_VISCOUS])
         if not hit:
             # re-check failed: a grazing contact that round-off turned into "separating" (or into
             # an approach below rounding, which the prediction ignores as well). Nothing changed,
@@ -428,7 +431,8 @@ def _wall_handler(grav_on):
                           walls.planes_omg[w], planes_n[w, 0], planes_n[w, 1], planes_n[w, 2],
                           dyn.inv_m[i], 0.0, dyn.inv_i[i], 0.0, ri, 0.0, 1.0 / ri, row, rec,
                           flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING],
-                          flags[FL_ADHESION], rotation, False)
+                          flags[FL_ADHESION], rotation, False, flags[FL_COMPLIANCE],
+                          flags[FL_VISCOUS])
         if not hit:
             # re-check failed (see on_pair)
             repredict_later(isc, i)

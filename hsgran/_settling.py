@@ -44,11 +44,13 @@ from hsgran._state import (
     F_LANDING_SPEED,
     F_TC_TIME,
     FL_ADHESION,
+    FL_COMPLIANCE,
     FL_FRICTION,
     FL_GRAVITY,
     FL_PLASTICITY,
     FL_ROLLING,
     FL_ROTATION,
+    FL_VISCOUS,
     S_R,
     S_V,
 )
@@ -550,7 +552,8 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
         if not hit and approaching(i, j, dx, dy, dz, ri + rj, st):
             hit = resolve(st[i, S_V:S_V + 3], wi, st[j, S_V:S_V + 3], wj, nx, ny, nz, inv_mi,
                           inv_mj, inv_ii, inv_ij, ri, rj, 1.0 / ri + 1.0 / rj, row, rec,
-                          plasticity, friction, rolling, adhesion, rotation, False)
+                          plasticity, friction, rolling, adhesion, rotation, False,
+                          flags[FL_COMPLIANCE], flags[FL_VISCOUS])
         if hit and (ci > 0.0 or cj > 0.0):
             # the impulse J on i, recovered from the body that moved freely along n
             if inv_mi >= inv_mj:
@@ -667,7 +670,7 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     hit = resolve(st[i, S_V:S_V + 3], wi, walls.planes_vel[w], walls.planes_omg[w],
                   planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0, dyn.inv_i[i],
                   0.0, ri, 0.0, 1.0 / ri, row, rec, plasticity, friction, rolling, adhesion,
-                  rotation, False)
+                  rotation, False, flags[FL_COMPLIANCE], flags[FL_VISCOUS])
     if hit and ci >= 0.0:
         _backed_velocity(i, vi0x, vi0y, vi0z, (st[i, 3] - vi0x) / inv_mi,
                          (st[i, 4] - vi0y) / inv_mi, (st[i, 5] - vi0z) / inv_mi,

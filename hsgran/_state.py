@@ -134,7 +134,9 @@ FL_LOG = 6  #: record every event in the log buffer
 #: touching spheres and walls are solved as clusters (hsgran._cluster) instead of by the
 #: pairwise rules of hsgran._settling (docs/enduring-contact.md)
 FL_CLUSTERS = 7
-FL_SIZE = 8
+FL_COMPLIANCE = 8  #: tangential compliance, beyond the paper (docs/model.md §4.5)
+FL_VISCOUS = 9  #: viscoelastic damping, beyond the paper (docs/model.md §3.11)
+FL_SIZE = 10
 
 # What a prediction reads of a neighbour sits in one 64-byte row (one cache line) of ``st``:
 S_X = 0  #: position x, y, z at the sphere's local time [m] (columns 0–2)

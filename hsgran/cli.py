@@ -27,7 +27,7 @@ from dataclasses import asdict, replace
 import numpy as np
 
 from hsgran import __version__
-from hsgran.effects import Effects
+from hsgran.effects import BEYOND_PAPER, Effects
 from hsgran.errors import EXIT_BAD_INPUT, InputError, did_you_mean
 from hsgran.impact import (
     SOLID_SPHERE_INERTIA,
@@ -182,12 +182,15 @@ _IMPACT_DESCRIPTION = _paragraphs(
     "with --json.",
     f"Frame: {IMPACT_FRAME}. The resting sphere lies below the moving one, so --angle has the "
     "same meaning for a wall and for a sphere.",
-    "Every effect is on unless --effects picks a subset (comma-separated, from: "
-    f"{', '.join(Effects.names())}; 'none' for none); 'friction' needs 'rotation' and "
-    "'rolling_resistance' needs 'friction'. 'gravity' is accepted and ignored (one impact has "
-    "no free flight). The pair's contact properties come from the built-in library or a "
-    "--materials file, with the overrides below applied; with 'friction' on, the pair needs a "
-    "sliding friction (--friction, or sliding_friction in a --materials file).",
+    "Every effect of the paper is on unless --effects picks a subset (comma-separated, from: "
+    f"{', '.join(Effects.names())}; 'none' for none); 'friction' needs 'rotation', "
+    "'rolling_resistance' and 'tangential_compliance' need 'friction'. "
+    f"{' and '.join(BEYOND_PAPER)} are physics beyond the paper (docs/model.md §4.5, §3.11; "
+    "the compliance table and the combination of viscous and plastic losses are our own "
+    "reconstructions [OURS]): they are on only when named. 'gravity' is accepted and ignored "
+    "(one impact has no free flight). The pair's contact properties come from the built-in "
+    "library or a --materials file, with the overrides below applied; with 'friction' on, the "
+    "pair needs a sliding friction (--friction, or sliding_friction in a --materials file).",
     RECONSTRUCTION_NOTE,
 )
 
@@ -241,6 +244,10 @@ def _add_impact_parser(sub) -> None:
                        help="yield stress of the moving sphere's material, and of the other "
                             "sphere's with --other [Pa]; not of a wall (the pair yields at "
                             "the smaller of its two yield stresses)")
+    model.add_argument("--dissipative-constant", metavar="S",
+                       help="dissipative constant A of the moving sphere's material, and of "
+                            "the other sphere's with --other [s] (viscoelastic_damping, "
+                            "docs/model.md §3.11)")
     model.add_argument("--work-of-adhesion", metavar="J_M2",
                        help="work of adhesion of the pair [J/m^2] (f0 estimated from it)")
     out = p.add_argument_group("output")
@@ -274,13 +281,15 @@ def _library(path: str | None) -> MaterialLibrary:
 
 
 def _sphere_material(lib: MaterialLibrary, name: str, option: str,
-                     yield_stress: float | None) -> Material:
+                     yield_stress: float | None, dissipative: float | None = None) -> Material:
     m = lib.material(name, option)
     if not math.isfinite(m.density):
         raise InputError(f"material '{name}' has no finite density: it can only be a wall",
                          option)
     if yield_stress is not None:
         m = check_material(replace(m, yield_stress=yield_stress), f"{option} {name}")
+    if dissipative is not None:
+        m = check_material(replace(m, dissipative_constant=dissipative), f"{option} {name}")
     return m
 
 
@@ -325,6 +334,7 @@ def cmd_impact(args: argparse.Namespace) -> int:
                     lambda x: 0.0 <= x < 90.0)
     spin = _number(args.spin, "--spin")
     yield_stress = _positive(args.yield_stress, "--yield-stress")
+    dissipative = _non_negative(args.dissipative_constant, "--dissipative-constant")
     if args.other is not None and args.other_radius is None:
         raise InputError("missing value: the radius of the other sphere [m] is required with "
                          "--other", "--other-radius")
@@ -337,11 +347,11 @@ def cmd_impact(args: argparse.Namespace) -> int:
         raise InputError("a spin needs the 'rotation' effect; add it to --effects", "--spin")
 
     lib = _library(args.materials)
-    sphere = _sphere_material(lib, args.sphere, "--sphere", yield_stress)
+    sphere = _sphere_material(lib, args.sphere, "--sphere", yield_stress, dissipative)
     if args.wall is not None:
         body2 = lib.material(args.wall, "--wall")
     else:
-        body2 = _sphere_material(lib, args.other, "--other", yield_stress)
+        body2 = _sphere_material(lib, args.other, "--other", yield_stress, dissipative)
     contact = _pair_contact(lib, sphere.name, body2.name, overrides, effects)
 
     velocity = oblique_velocity(speed, angle)
@@ -365,7 +375,8 @@ def cmd_impact(args: argparse.Namespace) -> int:
         "velocity_before": velocity, "angular_velocity_before": omega,
         "normal": [0.0, 0.0, 1.0], "frame": IMPACT_FRAME,
         "materials_file": args.materials,
-        "overrides": {**overrides, "yield_stress": yield_stress},
+        "overrides": {**overrides, "yield_stress": yield_stress,
+                      "dissipative_constant": dissipative},
         "sphere_material": asdict(sphere),
         ("wall_material" if args.wall is not None else "other_material"): asdict(body2),
         "contact": asdict(contact),

@@ -15,7 +15,14 @@ Effects and what they switch on:
                       without it the normal law is elastic Hertz (e_n = 1) or the pair's fixed
                       restitution
 ``adhesion``          Dunn's line force during recovery, MODEL §3.8
+``tangential_compliance`` beyond the paper: the friction impulse of an elastic (Mindlin) contact
+                      instead of rigid sticking, docs/model.md §4.5 (needs ``friction``)
+``viscoelastic_damping`` beyond the paper: the restitution of viscoelastic spheres below the
+                      yield speed, docs/model.md §3.11
 ===================== ==========================================================================
+
+The last two are physics beyond the paper (docs/model.md says where each comes from); without
+them every result is the paper's, bit for bit.
 """
 
 from __future__ import annotations
@@ -25,9 +32,13 @@ from dataclasses import dataclass, fields
 from hsgran.errors import InputError, did_you_mean
 
 #: Which effect needs which other effect to make sense.
+#: Effects of physics beyond the paper: never on unless a scene or call names them.
+BEYOND_PAPER = ("tangential_compliance", "viscoelastic_damping")
+
 REQUIRES = {
     "friction": ("rotation",),
     "rolling_resistance": ("friction",),
+    "tangential_compliance": ("friction",),
 }
 
 
@@ -41,6 +52,8 @@ class Effects:
     rolling_resistance: bool = False
     plasticity: bool = False
     adhesion: bool = False
+    tangential_compliance: bool = False
+    viscoelastic_damping: bool = False
 
     @classmethod
     def names(cls) -> tuple[str, ...]:
@@ -81,8 +94,8 @@ class Effects:
 
     @classmethod
     def all(cls) -> Effects:
-        """Every effect on."""
-        return cls(**{n: True for n in cls.names()})
+        """Every effect of the paper on (those of BEYOND_PAPER stay off: name them)."""
+        return cls(**{n: n not in BEYOND_PAPER for n in cls.names()})
 
     def enabled(self) -> tuple[str, ...]:
         """Names of the enabled effects, in the fixed order of :meth:`names`."""

@@ -42,6 +42,7 @@ from hsgran import _state as es
 from hsgran._cluster import slack
 from hsgran._flight import MAX_ZERO_TIME_EVENTS
 from hsgran._state import FIELDS, Sizes, allocate, groups_of, stored_fields
+from hsgran.contact import compliance, viscous
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.calendar import calendar_build, new_calendar
@@ -179,7 +180,9 @@ def _flags(eff, log_events: bool, clusters: bool = False) -> np.ndarray:
     for k, on in ((es.FL_PLASTICITY, eff.plasticity), (es.FL_FRICTION, eff.friction),
                   (es.FL_ROLLING, eff.rolling_resistance), (es.FL_ADHESION, eff.adhesion),
                   (es.FL_ROTATION, eff.rotation), (es.FL_GRAVITY, eff.gravity),
-                  (es.FL_LOG, log_events), (es.FL_CLUSTERS, clusters and eff.gravity)):
+                  (es.FL_LOG, log_events), (es.FL_CLUSTERS, clusters and eff.gravity),
+                  (es.FL_COMPLIANCE, eff.tangential_compliance),
+                  (es.FL_VISCOUS, eff.viscoelastic_damping)):
         flags[k] = bool(on)
     return flags
 
@@ -262,6 +265,10 @@ class Simulation:
         self.log_events = bool(log_events)
         clusters = scene.treatment == "clusters"
         self.flags = _flags(eff, self.log_events, clusters)
+        if eff.tangential_compliance:
+            compliance.check_table()
+        if eff.viscoelastic_damping:
+            viscous.check_table()
         self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)  # [kg]
         self.inertia = SOLID_SPHERE_INERTIA * self.mass * scene.radius**2  # [kg m²]
         self.pair_table = np.ascontiguousarray(scene.pair_table())

@@ -60,7 +60,9 @@ P_MU_R = 10  #: rolling friction μ_r [-]
 P_E_FIXED = 11  #: prescribed normal restitution, or -1 when the staged/elastic law applies [-]
 P_F0 = 12  #: adhesion line force given directly [N/m] (0 if none)
 P_F0_COEF = 13  #: f0 / R*^(1/3) from a work of adhesion [N/m^(4/3)] (0 if none)
-PAIR_ROW_SIZE = 14
+P_G_RATIO = 14  #: κ = G*/E*, Mindlin's shear over Hertz's modulus (docs/model.md §4.5) [-]
+P_VISC = 15  #: dissipative constant A of the pair (docs/model.md §3.11) [s]
+PAIR_ROW_SIZE = 16
 
 #: Marker stored in P_E_FIXED when no restitution is prescribed.
 NO_FIXED_RESTITUTION = -1.0
@@ -77,6 +79,9 @@ class Material:
         poisson_ratio: Poisson ratio ν [-], in [-1, 0.5).
         yield_stress: Uniaxial yield stress σ_y [Pa]; ``inf`` means the body never yields.
         surface_energy: Surface free energy γ [J/m²]; 0 means no adhesion.
+        dissipative_constant: Brilliantov et al.'s (1996) dissipative constant A [s], the
+            viscous relaxation time of the bulk (docs/model.md §3.11); 0 means elastic. Used
+            only by the ``viscoelastic_damping`` effect.
         source: Where the numbers come from.
     """
 
@@ -87,11 +92,18 @@ class Material:
     yield_stress: float = math.inf
     surface_energy: float = 0.0
     source: str = ""
+    dissipative_constant: float = 0.0
 
     @property
     def rigid(self) -> bool:
         """True when the material does not deform (E = ∞)."""
         return math.isinf(self.youngs_modulus)
+
+    def shear_modulus(self) -> float:
+        """G = E/(2(1 + ν)) [Pa] (∞ for a rigid body)."""
+        if self.rigid:
+            return math.inf
+        return self.youngs_modulus / (2.0 * (1.0 + self.poisson_ratio))
 
     def compliance(self) -> float:
         """(1 − ν²)/E [1/Pa], this body's share of 1/E* (0 for a rigid body). MODEL §2."""
@@ -204,6 +216,10 @@ def check_material(m: Material, key: str) -> Material:
     g = check_number(m.surface_energy, f"{key}.surface_energy")
     if g < 0:
         raise InputError(f"must be >= 0 J/m^2, got {m.surface_energy!r}", f"{key}.surface_energy")
+    a = check_number(m.dissipative_constant, f"{key}.dissipative_constant")
+    if a < 0:
+        raise InputError(f"must be >= 0 s, got {m.dissipative_constant!r}",
+                         f"{key}.dissipative_constant")
     return m
 
 
@@ -278,6 +294,20 @@ def effective_modulus(m1: Material, m2: Material) -> float:
     return 1.0 / s
 
 
+def effective_shear_modulus(m1: Material, m2: Material) -> float:
+    """G* with 1/G* = (2 − ν1)/G1 + (2 − ν2)/G2 [Pa] (Mindlin 1949; a rigid body drops out;
+    docs/model.md §4.5)."""
+    return 1.0 / sum((2.0 - m.poisson_ratio) / m.shear_modulus() for m in (m1, m2)
+                     if not m.rigid)
+
+
+def pair_dissipative_constant(m1: Material, m2: Material) -> float:
+    """The pair's dissipative constant A [s]: each body's A weighted by its share of the
+    deformation, (1 − ν²)/E (docs/model.md §3.11, [OURS]; for two equal materials, theirs)."""
+    c1, c2 = m1.compliance(), m2.compliance()
+    return (m1.dissipative_constant * c1 + m2.dissipative_constant * c2) / (c1 + c2)
+
+
 def work_of_adhesion(m1: Material, m2: Material, contact: Contact) -> float:
     """Δγ [J/m²]: the pair's value if given, else 2 (γ1 γ2)^(1/2) (MODEL §3.8, [OURS])."""
     if contact.work_of_adhesion is not None:
@@ -328,6 +358,8 @@ def pair_row(m1: Material, m2: Material, contact: Contact) -> np.ndarray:
         row[P_WY_R3] = wy_r3
         row[P_WP_R3] = wy_r3 + fy_r2 * dy_r * bracket
         row[P_P_P] = kappa * sigma
+    row[P_G_RATIO] = effective_shear_modulus(m1, m2) / e_star
+    row[P_VISC] = pair_dissipative_constant(m1, m2)
     row[P_MU_S] = 0.0 if contact.sliding_friction is None else float(contact.sliding_friction)
     row[P_MU_R] = float(contact.rolling_friction)
     row[P_E_FIXED] = (NO_FIXED_RESTITUTION if contact.restitution is None
@@ -379,7 +411,8 @@ def critical_values(row: np.ndarray, r_eff: float, m_eff: float) -> CriticalValu
 
 # ---- tables from TOML --------------------------------------------------------------------
 
-MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "yield_stress", "surface_energy")
+MATERIAL_KEYS = ("density", "youngs_modulus", "poisson_ratio", "yield_stress", "surface_energy",
+                 "dissipative_constant")
 CONTACT_KEYS = ("between", "sliding_friction", "rolling_friction", "restitution",
                 "adhesion_line_force", "work_of_adhesion", "yield_factor", "hardness_factor",
                 "plastic_ratio")

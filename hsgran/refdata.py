@@ -29,7 +29,7 @@ from hsgran.errors import InputError, did_you_mean
 #: The package that holds the data files.
 DATA_PACKAGE = "hsgran.data"
 #: File types that count as reference data (``__init__.py`` and the like are not data).
-DATA_SUFFIXES = (".csv", ".md", ".toml")
+DATA_SUFFIXES = (".csv", ".md", ".toml", ".npz")
 
 # Keeps files extracted from a zipped installation alive until the interpreter exits.
 _EXTRACTED = contextlib.ExitStack()

@@ -183,6 +183,24 @@ def test_yield_stress_override_leaves_the_wall_alone(capsys):
     assert "governing yield stress (wall)" in capsys.readouterr().out
 
 
+def test_effects_beyond_the_paper_act_only_when_named(capsys):
+    """docs/model.md §3.11: below the yield speed a viscoelastic sphere loses energy (the
+    series' leading term: 1 − e ≈ 1.153 X); §4.5: near normal incidence an elastic contact's
+    tangential impulse is far from the rigid rule's (e_t ≠ 5/7)."""
+    slow = ["impact", "--sphere", "steel", "--wall", "rigid", "--radius", "0.001", "--speed",
+            "0.01", "--angle", "0", "--dissipative-constant", "2e-7"]
+    assert run_json(capsys, *slow, "--effects", "plasticity")["e_n"] == 1.0
+    damped = run_json(capsys, *slow, "--effects", "plasticity,viscoelastic_damping")
+    assert 0.8 < damped["e_n"] < 1.0
+    assert damped["input"]["sphere_material"]["dissipative_constant"] == 2e-7
+    oblique = ["impact", "--sphere", "alumina", "--wall", "rigid", "--radius", "0.0025",
+               "--speed", "3.9", "--angle", "10", "--friction", "0.092", "--restitution", "0.98"]
+    rigid = run_json(capsys, *oblique, "--effects", "rotation,friction")
+    elastic = run_json(capsys, *oblique, "--effects", "rotation,friction,tangential_compliance")
+    assert rigid["derived"]["e_t"] == pytest.approx(5.0 / 7.0, rel=1e-12)
+    assert elastic["derived"]["e_t"] == pytest.approx(0.698, abs=0.01)  # Chung & Ooi's DEM: 0.687 at 10.2°
+
+
 def test_rolling_friction_and_work_of_adhesion_overrides_act(capsys):
     args = [*STEEL_ON_STEEL, "--speed", "0.05", "--angle", "20", "--spin", "100",
             "--friction", "0.3"]

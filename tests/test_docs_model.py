@@ -15,11 +15,12 @@ ROOT = Path(__file__).resolve().parents[1]
 MODEL_PAGE = ROOT / "docs" / "model.md"
 CITING_DIRS = ("hsgran", "tests", "tools")
 
-#: Every section of the specification, in its numbering.
+#: Every section of the specification, in its numbering, and hsgran's own sections on physics
+#: beyond the paper appended to theirs (§3.11 viscoelastic damping, §4.5 tangential compliance).
 SECTIONS = (
     ["0", "1", "2", "3"]
-    + [f"3.{k}" for k in range(1, 11)]
-    + ["4"] + [f"4.{k}" for k in range(1, 5)]
+    + [f"3.{k}" for k in range(1, 12)]
+    + ["4"] + [f"4.{k}" for k in range(1, 6)]
     + ["5"] + [f"5.{k}" for k in range(1, 4)]
     + ["6", "7", "7.1", "8", "9", "10"]
 )

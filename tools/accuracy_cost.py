@@ -329,6 +329,13 @@ def fidelity_levels():
         ("staged + adhesion", "impulse",
          (Contact(sliding_friction=mu, work_of_adhesion=LEVEL_WORK_OF_ADHESION),
           Effects.parse([*base, "plasticity", "adhesion"]), "")),
+        # beyond the paper (docs/model.md §4.5, §3.11)
+        ("fixed e = 0.98 + tangential_compliance", "impulse",
+         (Contact(sliding_friction=mu, restitution=CO4_E_FIXED),
+          Effects.parse([*base, "tangential_compliance"]), "")),
+        ("staged + tangential_compliance", "impulse",
+         (Contact(sliding_friction=mu), Effects.parse([*base, "plasticity",
+                                                       "tangential_compliance"]), "")),
         ("time-resolved staged, Coulomb", "resolved",
          (Contact(sliding_friction=mu), Effects.parse([*base, "plasticity"]), "coulomb")),
         ("time-resolved staged, Mindlin spring", "resolved",

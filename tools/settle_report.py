@@ -3,7 +3,7 @@ collapse guard stops it (docs/enduring-contact.md, "Settling scenes: where it st
 
 Usage:
     NUMBA_CACHE_DIR=... .venv/bin/python tools/settle_report.py [SCENE ...]
-        [--duration 1.0] [--interval 0.01]
+        [--duration 1.0] [--interval 0.01] [--set KEY=TOML_VALUE ...]
 
 Default scenes: ``scenarios/falling_box.toml`` (its duration raised to ``--duration``) and
 ``tools/scenes/pour.toml`` (2000 spheres poured at e = 0.5). For each interval of simulated time
@@ -18,6 +18,7 @@ import argparse
 import dataclasses
 import sys
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -33,8 +34,8 @@ DEFAULT_SCENES = (ROOT / "scenarios" / "falling_box.toml", ROOT / "tools" / "sce
 MOTION_EVENTS = ("pair", "wall", "state", "land")
 
 
-def report(path: Path, duration: float, interval: float) -> None:
-    scene = dataclasses.replace(load_scene(path), duration=duration)
+def report(path: Path, duration: float, interval: float, overrides=None) -> None:
+    scene = dataclasses.replace(load_scene(path, overrides=overrides), duration=duration)
     sim = Simulation(scene)
     idx = [EVENT_NAMES.index(k) for k in MOTION_EVENTS]
     print(f"# {path.name}: {scene.n} spheres to t = {duration} s")
@@ -54,6 +55,8 @@ def report(path: Path, duration: float, interval: float) -> None:
         rate = d[idx].sum() / scene.n / interval
         rest = int(np.sum(sim.mstate == MS_REST)) if scene.effects.gravity else 0
         print(f"{t:8.3f} {rate:18.1f} {rest:8d} {time.perf_counter() - t0:9.1f}", flush=True)
+    print("events by kind: "
+          + ", ".join(f"{k} {c}" for k, c in zip(EVENT_NAMES, sim.counts, strict=True) if c))
     print(f"finished at t = {duration} s")
 
 
@@ -62,9 +65,21 @@ def main(argv=None) -> int:
     ap.add_argument("scenes", nargs="*", type=Path, default=list(DEFAULT_SCENES))
     ap.add_argument("--duration", type=float, default=1.0, help="simulated time [s]")
     ap.add_argument("--interval", type=float, default=0.01, help="report interval [s]")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="override a scene key; VALUE in TOML (e.g. "
+                         "'scene.effects=[\"gravity\"]'); repeatable")
     args = ap.parse_args(argv)
+    overrides = {}
+    for item in args.set:
+        key, sep, value = item.partition("=")
+        if not sep:
+            ap.error(f"--set {item!r}: expected KEY=VALUE")
+        try:
+            overrides[key.strip()] = tomllib.loads(f"v = {value}")["v"]
+        except tomllib.TOMLDecodeError as ex:
+            ap.error(f"--set {item!r}: the value is not TOML ({ex})")
     for path in args.scenes:
-        report(path, args.duration, args.interval)
+        report(path, args.duration, args.interval, overrides or None)
     return 0
 
 

@@ -25,6 +25,7 @@ import numpy as np
 
 from hsgran._jit import njit
 from hsgran.contact.adhesion import adhesion_work, line_force
+from hsgran.contact.compliance import compliant_impulse
 from hsgran.contact.normal import (
     STAGE_ELASTIC,
     STAGE_FIXED,
@@ -35,9 +36,24 @@ from hsgran.contact.normal import (
     staged_max_compression,
 )
 from hsgran.contact.rolling import rolling_couple
-from hsgran.contact.tangential import REGIME_NONE, tangential_impulse
+from hsgran.contact.tangential import (
+    REGIME_NONE,
+    REGIME_ROLLING,
+    REGIME_SLIDING,
+    tangential_impulse,
+)
+from hsgran.contact.viscous import viscoelastic_restitution
 from hsgran.effects import Effects
-from hsgran.materials import P_E_FIXED, P_E_STAR, P_MU_R, P_MU_S, P_WP_R3, P_WY_R3
+from hsgran.materials import (
+    P_E_FIXED,
+    P_E_STAR,
+    P_G_RATIO,
+    P_MU_R,
+    P_MU_S,
+    P_VISC,
+    P_WP_R3,
+    P_WY_R3,
+)
 
 #: A slip (or rolling) speed below SLIP_EPS_REL × max(v0, 1 m/s) has no defined direction and
 #: gets no impulse: that is round-off of velocities of order v0 (MODEL §2, ε_t).
@@ -73,7 +89,8 @@ REC_SIZE = 20
 # this kernel (inlined into the event loop) would pass back and forth as tuples.
 @njit(inline="always")
 def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, curv, row, rec,
-            plasticity, friction, rolling, adhesion, rotation, diagnostics):
+            plasticity, friction, rolling, adhesion, rotation, diagnostics, compliance=False,
+            viscous=False):
     """Apply one collision to two bodies (velocities and spins updated in place).
 
     Args:
@@ -88,6 +105,9 @@ def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, 
         rec: Record array of size ``REC_SIZE`` (written), see the ``REC_*`` indices.
         plasticity, friction, rolling, adhesion, rotation, diagnostics: effect flags; use
             :func:`make_resolver` to make them compile-time constants.
+        compliance, viscous: the effects beyond the paper, ``tangential_compliance``
+            (docs/model.md §4.5) and ``viscoelastic_damping`` (§3.11); off, the result is the
+            paper's bit for bit.
 
     Returns:
         True if the bodies were approaching (a collision was applied), else False.
@@ -145,6 +165,9 @@ def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, 
             e_n = 0.0
         elif stage != STAGE_ELASTIC or w_a > 0.0:
             e_n = math.sqrt((w_r - w_a) / t0)  # §3.9
+    if viscous and e_fixed < 0.0 and row[P_VISC] > 0.0:
+        # §3.11: the viscoelastic restitution, times what the staged model returns
+        e_n *= viscoelastic_restitution(v0, m_eff, r_eff, e_star, row[P_VISC])
     j_n = (1.0 + e_n) * m_eff * v0  # §3.6
 
     eps = SLIP_EPS_REL * max(v0, 1.0)
@@ -199,7 +222,12 @@ def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, 
         slip = math.sqrt(stx * stx + sty * sty + stz * stz)
         if slip > eps:
             m_t = 1.0 / (inv_m1 + inv_m2 + r1 * r1 * inv_i1 + r2 * r2 * inv_i2)
-            j_t, regime = tangential_impulse(slip, m_t, row[P_MU_S], j_n)
+            if compliance:  # §4.5: the elastic contact's impulse, from the table
+                j_t, sliding = compliant_impulse(slip, m_t, row[P_MU_S], j_n, row[P_G_RATIO],
+                                                 e_n)
+                regime = REGIME_SLIDING if sliding else REGIME_ROLLING
+            else:
+                j_t, regime = tangential_impulse(slip, m_t, row[P_MU_S], j_n)
             tx = stx / slip
             ty = sty / slip
             tz = stz / slip
@@ -216,7 +244,7 @@ def resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, 
         v2[0] -= jx * inv_m2
         v2[1] -= jy * inv_m2
         v2[2] -= jz * inv_m2
-    if rotation and j_t > 0.0:
+    if rotation and j_t != 0.0:  # (J_t < 0: the tangential recoil of §4.5)
         # ω1 += (R1 J_t/I1)(n × t̂), ω2 += (R2 J_t/I2)(n × t̂)  (§4.1)
         cx = ny * tz - nz * ty
         cy = nz * tx - nx * tz
@@ -274,7 +302,8 @@ _BATCHES: dict = {}
 
 def _flags(effects: Effects, diagnostics: bool):
     return (bool(effects.plasticity), bool(effects.friction), bool(effects.rolling_resistance),
-            bool(effects.adhesion), bool(effects.rotation), bool(diagnostics))
+            bool(effects.adhesion), bool(effects.rotation), bool(diagnostics),
+            bool(effects.tangential_compliance), bool(effects.viscoelastic_damping))
 
 
 def make_resolver(effects: Effects, diagnostics: bool = False):
@@ -293,13 +322,13 @@ def make_resolver(effects: Effects, diagnostics: bool = False):
     """
     key = _flags(effects, diagnostics)
     if key not in _RESOLVERS:
-        PL, FR, RO, AD, ROT, DG = key
+        PL, FR, RO, AD, ROT, DG, CO, VI = key
 
         @njit
         def resolver(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, curv,
                      row, rec):
             return resolve(v1, w1, v2, w2, nx, ny, nz, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2,
-                           curv, row, rec, PL, FR, RO, AD, ROT, DG)
+                           curv, row, rec, PL, FR, RO, AD, ROT, DG, CO, VI)
 
         _RESOLVERS[key] = resolver
     return _RESOLVERS[key]
@@ -308,13 +337,13 @@ def make_resolver(effects: Effects, diagnostics: bool = False):
 @njit(inline="always")
 def _resolve_batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2,
                    curv, rows, pair_index, recs, plasticity, friction, rolling, adhesion,
-                   rotation, diagnostics):
+                   rotation, diagnostics, compliance, viscous):
     hit = np.zeros(vel1.shape[0], dtype=np.bool_)
     for k in range(vel1.shape[0]):
         hit[k] = resolve(vel1[k], omg1[k], vel2[k], omg2[k], normal[k, 0], normal[k, 1],
                          normal[k, 2], inv_m1[k], inv_m2[k], inv_i1[k], inv_i2[k], r1[k], r2[k],
                          curv[k], rows[pair_index[k]], recs[k], plasticity, friction, rolling,
-                         adhesion, rotation, diagnostics)
+                         adhesion, rotation, diagnostics, compliance, viscous)
     return hit
 
 
@@ -334,15 +363,17 @@ def make_batch_resolver(effects: Effects, diagnostics: bool = False, switched: b
     key = _flags(effects, diagnostics)
     if switched:
         return partial(_batch_switched, plasticity=key[0], friction=key[1], rolling=key[2],
-                       adhesion=key[3], rotation=key[4], diagnostics=key[5])
+                       adhesion=key[3], rotation=key[4], diagnostics=key[5],
+                       compliance=key[6], viscous=key[7])
     if key not in _BATCHES:
-        PL, FR, RO, AD, ROT, DG = key
+        PL, FR, RO, AD, ROT, DG, CO, VI = key
 
         @njit(allocates=True)
         def batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2, curv,
                   rows, pair_index, recs):
             return _resolve_batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2,
-                                  r1, r2, curv, rows, pair_index, recs, PL, FR, RO, AD, ROT, DG)
+                                  r1, r2, curv, rows, pair_index, recs, PL, FR, RO, AD, ROT, DG,
+                                  CO, VI)
 
         _BATCHES[key] = batch
     return _BATCHES[key]
@@ -351,10 +382,10 @@ def make_batch_resolver(effects: Effects, diagnostics: bool = False, switched: b
 @njit(allocates=True)
 def _batch_switched(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2,
                     curv, rows, pair_index, recs, plasticity, friction, rolling, adhesion,
-                    rotation, diagnostics):
+                    rotation, diagnostics, compliance, viscous):
     return _resolve_batch(vel1, omg1, vel2, omg2, normal, inv_m1, inv_m2, inv_i1, inv_i2, r1, r2,
                           curv, rows, pair_index, recs, plasticity, friction, rolling, adhesion,
-                          rotation, diagnostics)
+                          rotation, diagnostics, compliance, viscous)
 
 
 def new_record() -> np.ndarray:

@@ -133,6 +133,17 @@ def dashpot_force(approach_rate, d, r_eff, m_eff, e_star, coef):
 
 
 @njit
+def kuwabara_kono_force(approach_rate, d, r_eff, e_star, a_diss):
+    """Viscous normal force of viscoelastic spheres (Kuwabara & Kono 1987; Brilliantov et al.
+    1996; docs/model.md §3.11): (4/3) E* R*^(1/2) (3/2) A δ^(1/2) dδ/dt = A S_n dδ/dt [N],
+    with the Hertz normal stiffness S_n = 2 E* (R* δ)^(1/2) and the pair's dissipative
+    constant A [s]; dδ/dt [m/s] positive while compressing, δ [m]."""
+    if d <= 0.0:
+        return 0.0
+    return a_diss * 2.0 * e_star * math.sqrt(r_eff * d) * approach_rate
+
+
+@njit
 def coulomb_force(slip, m_t, mu, f_n, dt):
     """Tangential force of Coulomb friction with rigid sticking, for one time step.
 

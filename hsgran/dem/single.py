@@ -32,6 +32,7 @@ from hsgran.dem.law import (
     adhesion_force,
     coulomb_force,
     dashpot_force,
+    kuwabara_kono_force,
     loading_force,
     mindlin_force,
     rolling_torque,
@@ -44,9 +45,11 @@ from hsgran.materials import (
     P_E_STAR,
     P_MU_R,
     P_MU_S,
+    P_VISC,
     SOLID_SPHERE_INERTIA,
     Contact,
     Material,
+    effective_shear_modulus,
     pair_row,
     solid_sphere_mass,
 )
@@ -83,7 +86,7 @@ O_SIZE = 9
 
 
 @njit
-def _impact(v0, vt0, w0, radius, mass, inertia, r_eff, row, f0, g_star, coef, dt, plasticity,
+def _impact(v0, vt0, w0, radius, mass, inertia, r_eff, row, f0, g_star, coef, visc, dt, plasticity,
             adhesion, friction, rolling, tangential, max_steps, out):
     """Velocity-Verlet integration of one sphere–wall contact (see module notes).
 
@@ -96,6 +99,7 @@ def _impact(v0, vt0, w0, radius, mass, inertia, r_eff, row, f0, g_star, coef, dt
         f0: Adhesion line force [N/m] (used only with ``adhesion``).
         g_star: Effective shear modulus G* [Pa] (Mindlin only).
         coef: Dashpot coefficient (0: none).
+        visc: Dissipative constant A [s] of the viscoelastic (Kuwabara–Kono) force (0: none).
         dt: Time step [s].
         plasticity, adhesion, friction, rolling: Effect flags.
         tangential: ``TANGENTIAL_*`` code.
@@ -151,8 +155,11 @@ def _impact(v0, vt0, w0, radius, mass, inertia, r_eff, row, f0, g_star, coef, dt
             fel = loading_force(d, r_eff, row, plasticity)
             if d > 0.0:
                 a = math.sqrt(r_eff * d)
-        if coef > 0.0:
-            fel += dashpot_force(dd, d, r_eff, mass, e_star, coef)
+        if coef > 0.0 or visc > 0.0:
+            if coef > 0.0:
+                fel += dashpot_force(dd, d, r_eff, mass, e_star, coef)
+            if visc > 0.0:
+                fel += kuwabara_kono_force(dd, d, r_eff, e_star, visc)
             if fel < 0.0:
                 fel = 0.0  # a dashpot may not pull the surfaces together
         fn = fel
@@ -192,12 +199,12 @@ def _impact(v0, vt0, w0, radius, mass, inertia, r_eff, row, f0, g_star, coef, dt
 
 
 @njit
-def _impact_batch(v0, vt0, w0, radius, mass, inertia, r_eff, row, f0, g_star, coef, dt,
+def _impact_batch(v0, vt0, w0, radius, mass, inertia, r_eff, row, f0, g_star, coef, visc, dt,
                   plasticity, adhesion, friction, rolling, tangential, max_steps, out):
     """:func:`_impact` over arrays of initial states (v0, vt0, w0, dt, max_steps: shape (K,);
     out: (K, O_SIZE)); one compiled call, so the cost per impact can be timed."""
     for k in range(v0.shape[0]):
-        _impact(v0[k], vt0[k], w0[k], radius, mass, inertia, r_eff, row, f0, g_star, coef,
+        _impact(v0[k], vt0[k], w0[k], radius, mass, inertia, r_eff, row, f0, g_star, coef, visc,
                 dt[k], plasticity, adhesion, friction, rolling, tangential, max_steps[k], out[k])
 
 
@@ -219,19 +226,6 @@ class ResolvedImpact:
     steps: int  #: time steps taken [-]
     dt: float  #: time step [s]
     hertz_time: float  #: elastic Hertz duration at this speed, the unit of dt [s]
-
-
-def shear_modulus(material: Material) -> float:
-    """G = E/(2(1 + ν)) [Pa] (∞ for a rigid body)."""
-    if material.rigid:
-        return math.inf
-    return material.youngs_modulus / (2.0 * (1.0 + material.poisson_ratio))
-
-
-def effective_shear_modulus(m1: Material, m2: Material) -> float:
-    """G* with 1/G* = (2 − ν1)/G1 + (2 − ν2)/G2 [Pa] (Mindlin; a rigid body drops out)."""
-    s = sum((2.0 - m.poisson_ratio) / shear_modulus(m) for m in (m1, m2) if not m.rigid)
-    return 1.0 / s
 
 
 class _Setup:
@@ -262,13 +256,16 @@ class _Setup:
         self.tangential = TANGENTIAL_MODELS[tangential]
         self.f0 = float(line_force(self.row, self.radius)) if self.adhesion else 0.0
         self.coef = dashpot_coefficient(self.contact.restitution) if fixed else 0.0
+        # like the impulse model, a prescribed restitution bypasses the viscous force too
+        self.visc = (float(self.row[P_VISC]) if eff.viscoelastic_damping and not fixed
+                     else 0.0)
 
     def hertz_time(self, v0: float) -> float:
         return float(hertz_contact_time(v0, self.mass, self.radius, self.e_star))
 
     def kernel_args(self):
         return (self.radius, self.mass, self.inertia, self.radius, self.row, self.f0,
-                self.g_star, self.coef)
+                self.g_star, self.coef, self.visc)
 
     def flags(self):
         return (self.plasticity, self.adhesion, self.friction, self.rolling, self.tangential)
@@ -336,6 +333,75 @@ def resolved_wall_impact(sphere: Material, wall: Material, radius: float, speed:
     _impact(v0, vt0, w0, *setup.kernel_args(), dt, *setup.flags(),
             int(MAX_STEPS_FACTOR * steps_per_contact) + 10, out)
     return _result(setup, v0, vt0, w0, out, dt, t_h)
+
+
+@dataclass(frozen=True)
+class ResolvedPairImpact:
+    """Outcome of one time-resolved impact of two spheres (SI units). Frame: the normal n from
+    sphere 2 to sphere 1 is +z, the relative tangential velocity is along +x before, spins are
+    about +y."""
+
+    velocity_1: np.ndarray  #: centre velocity of sphere 1 after [m/s]
+    velocity_2: np.ndarray  #: centre velocity of sphere 2 after [m/s]
+    spin_1: float  #: spin of sphere 1 about +y after [rad/s]
+    spin_2: float  #: spin of sphere 2 about +y after [rad/s]
+    e_n: float  #: normal restitution of the relative velocity [-]
+    steps: int  #: time steps taken [-]
+
+
+def resolved_pair_impact(material_1: Material, material_2: Material, radius_1: float,
+                         radius_2: float, speed: float, angle_deg: float = 0.0, *,
+                         velocity_2=(0.0, 0.0, 0.0), spins=(0.0, 0.0),
+                         contact: Contact | None = None, effects: Effects | None = None,
+                         steps_per_contact: float = DEFAULT_STEPS_PER_CONTACT,
+                         tangential: str = "coulomb") -> ResolvedPairImpact:
+    """Integrate one impact of two spheres through the contact.
+
+    The contact forces act on the relative motion only, so the pair is integrated as one body
+    of mass m* = m1 m2/(m1 + m2) on a wall, whose tangential mass matches the pair's,
+    1/m_t = 1/m1 + 1/m2 + R1²/I1 + R2²/I2 (MODEL §4.1: a lever arm R* and inertia
+    R*²/(1/m_t − 1/m*)); each sphere then takes ±the impulse.
+
+    Args:
+        material_1, material_2, radius_1, radius_2: The spheres [m].
+        speed: Relative speed of sphere 1 with respect to sphere 2 [m/s].
+        angle_deg: Its angle from −n [deg], in [0, 90).
+        velocity_2: Sphere 2's velocity before [m/s] (sphere 1's is velocity_2 plus the
+            relative velocity).
+        spins: Spins of spheres 1 and 2 about +y before [rad/s].
+        Other arguments: as :func:`resolved_wall_impact`.
+    """
+    setup = _Setup(material_1, material_2, radius_1, contact, effects, tangential)
+    v0, vt0, _ = _initial(speed, angle_deg, 0.0)
+    r2 = check_positive(radius_2, "radius_2")
+    if material_2.rigid or not math.isfinite(material_2.density):
+        raise InputError(f"material '{material_2.name}' is rigid: it can be a wall, not a "
+                         "sphere", "material_2")
+    m1 = setup.mass
+    m2 = solid_sphere_mass(material_2.density, r2)
+    i1 = SOLID_SPHERE_INERTIA * m1 * radius_1**2
+    i2 = SOLID_SPHERE_INERTIA * m2 * r2**2
+    m_eff = m1 * m2 / (m1 + m2)
+    r_eff = radius_1 * r2 / (radius_1 + r2)
+    inv_mt = 1.0 / m1 + 1.0 / m2 + radius_1**2 / i1 + r2**2 / i2
+    inertia = r_eff**2 / (inv_mt - 1.0 / m_eff)
+    w_rel = (radius_1 * spins[0] + r2 * spins[1]) / r_eff  # slip u = v_t − (R1 ω1 + R2 ω2)
+    t_h = float(hertz_contact_time(v0, m_eff, r_eff, setup.e_star))
+    dt = t_h / check_positive(steps_per_contact, "steps_per_contact")
+    out = np.zeros(O_SIZE)
+    _impact(v0, vt0, w_rel, r_eff, m_eff, inertia, r_eff, setup.row,
+            float(line_force(setup.row, r_eff)) if setup.adhesion else 0.0, setup.g_star,
+            setup.coef, setup.visc, dt, *setup.flags(),
+            int(MAX_STEPS_FACTOR * steps_per_contact) + 10, out)
+    j_n = m_eff * (out[O_VN] + v0)  # on sphere 1, along +z
+    j_t = m_eff * (out[O_VT] - vt0)  # on sphere 1, along +x
+    u2 = np.asarray(velocity_2, dtype=float)
+    u1 = u2 + np.array([vt0, 0.0, -v0])
+    jv = np.array([j_t, 0.0, j_n])
+    return ResolvedPairImpact(
+        velocity_1=u1 + jv / m1, velocity_2=u2 - jv / m2,
+        spin_1=spins[0] - radius_1 * j_t / i1, spin_2=spins[1] - r2 * j_t / i2,
+        e_n=float(out[O_VN]) / v0, steps=int(out[O_STEPS]))
 
 
 def timed_wall_impacts(sphere: Material, wall: Material, radius: float, speeds, angles_deg,
@@ -408,7 +474,7 @@ def dashpot_coefficient(restitution: float) -> float:
     while hi - lo > CALIBRATION_TOL:
         mid = 0.5 * (lo + hi)
         _impact(v0, 0.0, 0.0, radius, mass, 0.4 * mass * radius**2, radius, row, 0.0, 1.0, mid,
-                dt, False, False, False, False, TANGENTIAL_COULOMB,
+                0.0, dt, False, False, False, False, TANGENTIAL_COULOMB,
                 int(MAX_STEPS_FACTOR * CALIBRATION_STEPS), out)
         if out[O_VN] / v0 > e:
             lo = mid
