@@ -198,7 +198,8 @@ def test_effects_beyond_the_paper_act_only_when_named(capsys):
     rigid = run_json(capsys, *oblique, "--effects", "rotation,friction")
     elastic = run_json(capsys, *oblique, "--effects", "rotation,friction,tangential_compliance")
     assert rigid["derived"]["e_t"] == pytest.approx(5.0 / 7.0, rel=1e-12)
-    assert elastic["derived"]["e_t"] == pytest.approx(0.698, abs=0.01)  # Chung & Ooi's DEM: 0.687 at 10.2°
+    # Chung & Ooi's DEM: 0.687 at 10.2° (tests/contact/test_compliance.py compares in full)
+    assert elastic["derived"]["e_t"] == pytest.approx(0.698, abs=0.01)
 
 
 def test_rolling_friction_and_work_of_adhesion_overrides_act(capsys):
