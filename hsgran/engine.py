@@ -47,7 +47,7 @@ from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.calendar import calendar_build, new_calendar
 from hsgran.events.grid import cell_coordinates, insert_all, plan_grid
-from hsgran.materials import SOLID_SPHERE_INERTIA
+from hsgran.materials import P_E_FIXED, P_VISC, SOLID_SPHERE_INERTIA
 from hsgran.onplane import CONVENTION_A, CONVENTION_B
 
 #: Bytes of frame buffer the engine may hold; frames are handed to observers when it is full.
@@ -130,13 +130,37 @@ class RunSummary:
     collisions: int = 0  #: pair + wall events
     events_per_second: float = 0.0  #: all executed events (collisions and cell crossings) / s
     interrupted: bool = False  #: the run stopped early because ``stop()`` said so
+    notes: list = field(default_factory=list)  #: what a user should know about the scene
 
     def lines(self) -> list[str]:
         """Human-readable summary."""
         by_kind = ", ".join(f"{k} {v:,}" for k, v in self.events.items() if v)
         return [f"events: {by_kind or 'none'}",
                 f"simulated time {self.simulated_time:.6g} s, wall time {self.wall_time:.3f} s, "
-                f"{self.events_per_second:,.0f} events/s"]
+                f"{self.events_per_second:,.0f} events/s"] + [f"note: {n}" for n in self.notes]
+
+
+#: The note of a scene with gravity whose collisions lose no normal energy.
+LOSSLESS_NOTE = ("no collision loses normal energy (no restitution below 1, no plasticity, "
+                 "adhesion or viscoelastic damping): under gravity the spheres bounce for ever "
+                 "unless friction stops them")
+
+
+def scene_notes(scene, pair_table: np.ndarray) -> list[str]:
+    """What a user should know about a scene before trusting its run: today, whether it has
+    gravity but no normal losses (docs/model.md §3.9: without restitution and plasticity the
+    collisions are elastic)."""
+    eff = scene.effects
+    if not eff.gravity or eff.plasticity or eff.adhesion:
+        return []
+    rows = pair_table.reshape(-1, pair_table.shape[-1])
+    rows = rows[~np.isnan(rows[:, P_E_FIXED])]
+    fixed = rows[:, P_E_FIXED]
+    if np.any((fixed >= 0.0) & (fixed < 1.0)):
+        return []
+    if eff.viscoelastic_damping and np.any(rows[:, P_VISC] > 0.0):
+        return []
+    return [LOSSLESS_NOTE]
 
 
 @dataclass
@@ -541,7 +565,7 @@ class Simulation:
             from tqdm import tqdm
 
             bar = tqdm(total=t_end, unit="s(sim)", bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g}"
-                       " s [{elapsed}<{remaining}, {postfix}]")
+                       " s [{elapsed}<{remaining}{postfix}]")
         wall0 = time.perf_counter()
         wall_ck = wall0
         interrupted = finished = False
@@ -594,7 +618,8 @@ class Simulation:
         summary = RunSummary(events=events, simulated_time=min(self.time, t_end), wall_time=wall,
                              collisions=events["pair"] + events["wall"],
                              events_per_second=executed / wall if wall > 0 else math.inf,
-                             interrupted=interrupted)
+                             interrupted=interrupted,
+                             notes=scene_notes(self.scene, self.pair_table))
         for ob in observers:
             if hasattr(ob, "on_finish"):
                 ob.on_finish(summary)

@@ -435,6 +435,15 @@ def _fmt(x: float) -> str:
     return f"{x:.6g}"
 
 
+def _fmt_apart(a: float, b: float) -> tuple[str, str]:
+    """``a`` and ``b`` with the fewest significant digits (at least 6) that tell them apart."""
+    for digits in range(6, 18):
+        sa, sb = f"{a:.{digits}g}", f"{b:.{digits}g}"
+        if sa != sb:
+            return sa, sb
+    return repr(a), repr(b)
+
+
 # ---- the parts of a scene ----------------------------------------------------------------
 #
 # Each part is a function of the document and of the parts it needs, passed as arguments, so no
@@ -975,10 +984,10 @@ def _check_overlaps(position: np.ndarray, radius: np.ndarray, space: Space,
     if pairs.shape[0]:
         order = np.lexsort((pairs[:, 0], pairs[:, 1]))
         i, j = (int(v) for v in pairs[order[0]])
-        d = dist[order[0]]
+        d, s = _fmt_apart(float(dist[order[0]]), float(radius[i] + radius[j]))
         raise InputError(
-            f"overlaps {names.label(i)} (centre distance {_fmt(d)} m < sum of radii "
-            f"{_fmt(radius[i] + radius[j])} m)", names.position_key(j))
+            f"overlaps {names.label(i)} (centre distance {d} m < sum of radii {s} m, beyond "
+            f"the tolerance of {CONTACT_TOLERANCE:g} of it)", names.position_key(j))
 
 
 def _check_planes(planes: list[Plane], position: np.ndarray, radius: np.ndarray,
@@ -989,10 +998,11 @@ def _check_planes(planes: list[Plane], position: np.ndarray, radius: np.ndarray,
         if bad.size:
             k = int(bad[0])
             where = ("lies behind" if d[k] < 0.0 else "penetrates")
+            dk, rk = _fmt_apart(float(d[k]), float(radius[k]))
             raise InputError(
-                f"{names.label(k)} {where} wall {plane.key} (centre {_fmt(d[k])} m from "
-                f"the plane, radius {_fmt(radius[k])} m; the normal points to where spheres "
-                "live)", names.position_key(k))
+                f"{names.label(k)} {where} wall {plane.key} (centre {dk} m from the plane, "
+                f"radius {rk} m, beyond the tolerance of {CONTACT_TOLERANCE:g} of the radius; "
+                "the normal points to where spheres live)", names.position_key(k))
 
 
 def _check_grid(walls: _Walls, periodic: tuple, radius: np.ndarray) -> None:

@@ -239,3 +239,29 @@ def test_frames_do_not_change_the_trajectory(seed):
         Simulation(scene, log_events=True).run(observers=[keep])
         logs.append(keep.log("time"))
     assert np.array_equal(logs[0], logs[1])
+
+
+def test_run_summary_says_when_gravity_meets_no_losses():
+    """A scene with gravity whose collisions are elastic (no restitution below 1, no
+    plasticity) says so in its run summary; the example scene with plasticity, or the same
+    scene with a restitution, does not."""
+    from hsgran.engine import LOSSLESS_NOTE
+    from hsgran.scene import load_scene
+
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "steel_ball_on_glass.toml"
+    lossless = {"scene.effects": ["gravity", "rotation", "friction"], "scene.duration": 0.05}
+    for overrides, noted in ((lossless, True),
+                             ({**lossless, "contacts[0].restitution": 0.9}, False),
+                             ({"scene.duration": 0.05}, False)):
+        summary = Simulation(load_scene(path, overrides=overrides)).run()
+        assert (f"note: {LOSSLESS_NOTE}" in summary.lines()) is noted, overrides
+
+
+def test_progress_bar_postfix_has_no_stray_comma(capsys):
+    from hsgran.scene import load_scene
+
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "steel_ball_on_glass.toml"
+    Simulation(load_scene(path, overrides={"scene.duration": 0.05})).run(progress=True)
+    err = capsys.readouterr().err
+    assert "collisions]" in err
+    assert ", ," not in err

@@ -548,3 +548,17 @@ def test_a_scene_larger_than_the_memory_available_is_refused_before_allocating(m
     assert err.value.key == "fill[0].count"
     assert "GB of memory" in str(err.value)
     assert "1 GB available" in str(err.value)
+
+
+def test_penetration_message_shows_the_difference():
+    """A centre written to 12 decimals just inside contact is refused with numbers that differ
+    (not 'centre 0.005 m from the plane, radius 0.005 m')."""
+    body = (BALL.replace("[0.0, 0.0, 0.1]", "[0.0, 0.0, 0.004999999999]")
+            + '[[walls]]\nkind = "plane"\npoint = [0, 0, 0]\nnormal = [0, 0, 1]\n'
+              'material = "glass"\n')
+    with pytest.raises(InputError) as err:
+        parse_scene(scene_text(body=body))
+    assert "centre 0.004999999999 m from the plane, radius 0.005 m" in str(err.value)
+    # within the documented tolerance (1e-12 of the radius) contact is accepted
+    ok = body.replace("0.004999999999]", "0.004999999999999999]")
+    assert parse_scene(scene_text(body=ok)).n == 1
