@@ -693,6 +693,42 @@ def cmd_render(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_export_parser(sub) -> None:
+    p = sub.add_parser(
+        "export", help="write a trajectory for ParaView (VTK) or OVITO (extended XYZ)",
+        description=_paragraphs(
+            "Write an HDF5 trajectory of 'hsgran run' in the files outside viewers open: "
+            "--format vtk, a ParaView collection (NAME.pvd, one .vtp per frame with radius, "
+            "velocity, spin, motion state, material and id per sphere, and walls.vtp); "
+            "--format xyz, one extended-XYZ file of all frames for OVITO (or ASE). Values "
+            "stay in SI units (metres, not ångström)."))
+    p.add_argument("trajectory", metavar="OUT.h5", help="trajectory file")
+    p.add_argument("--format", required=True, choices=("vtk", "xyz"),
+                   help="vtk (ParaView, needs the render extra) or xyz (OVITO, needs ASE)")
+    p.add_argument("-o", "--output", metavar="PATH",
+                   help="directory (vtk) or file (xyz); default: the trajectory's name with "
+                        "_vtk or .xyz")
+    p.add_argument("--every", metavar="K", help="write every K-th frame (default 1)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output")
+
+
+def cmd_export(args: argparse.Namespace) -> int:
+    """``hsgran export``: a trajectory for ParaView or OVITO."""
+    from hsgran.errors import MissingDependency
+    from hsgran.export import export
+
+    every = 1 if args.every is None else _number(args.every, "--every", "a whole number >= 1",
+                                                 lambda x: x >= 1 and x == int(x))
+    try:
+        result = export(args.trajectory, args.format, args.output, every=int(every),
+                        force=args.force)
+    except MissingDependency as exc:
+        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    print(f"wrote {result.output}: {result.frames} frames, {len(result.files)} files")
+    return 0
+
+
 def _add_plot_parser(sub) -> None:
     p = sub.add_parser(
         "plot", help="plot energies (and, for a few particles, height, speed, spin) vs time, "
@@ -771,6 +807,7 @@ HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "impact": cmd_impact,
     "run": cmd_run,
     "render": cmd_render,
+    "export": cmd_export,
     "plot": cmd_plot,
     "validate": cmd_validate,
     "sweep": cmd_sweep,
@@ -789,6 +826,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_impact_parser(sub)
     _add_run_parser(sub)
     _add_render_parser(sub)
+    _add_export_parser(sub)
     _add_plot_parser(sub)
     add_validate_parser(sub)
     add_sweep_parser(sub)

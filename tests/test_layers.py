@@ -40,6 +40,7 @@ LAYERS = {
     "render": 6,
     "animation": 6,
     "plot": 6,
+    "export": 6,
     "validate": 6,
     "validation.": 6,
     "cli": 6,

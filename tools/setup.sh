@@ -31,7 +31,7 @@ if [ ! -x .venv/bin/python ]; then
     "$PYTHON" -m venv .venv
 fi
 .venv/bin/python -m pip install --quiet --upgrade pip
-.venv/bin/python -m pip install --quiet -e '.[dev,render]'
+.venv/bin/python -m pip install --quiet -e '.[dev,render,export]'
 # Compile the event loop now, its versions side by side (a few minutes; seconds when the cache
 # has them already), rather than in the first run that needs each one.
 .venv/bin/hsgran compile
