@@ -580,6 +580,22 @@ def test_mdanalysis_reads_the_trajectory(tmp_path, mdanalysis_reads_metres, conv
     assert energy == traj.energies["potential_energy"][2]
 
 
+@pytest.mark.parametrize("convert_units", [False, True], ids=["SI", "angstrom"])
+def test_one_call_helper_gives_the_same_universe(tmp_path, mdanalysis_reads_metres,
+                                                 convert_units):
+    from hsgran.io.mdanalysis import universe
+
+    path = tmp_path / "run.h5"
+    write_file(path)
+    mine = universe(path, convert_units=convert_units)
+    by_hand = mdanalysis_reads_metres.Universe.empty(N, trajectory=True)
+    by_hand.load_new(str(path), format="H5MD", convert_units=convert_units)
+    assert mine.trajectory.n_frames == by_hand.trajectory.n_frames
+    for a, b in zip(mine.trajectory, by_hand.trajectory, strict=True):
+        np.testing.assert_array_equal(a.positions, b.positions)
+        assert a.time == b.time
+
+
 def test_mdanalysis_sees_no_cell_in_a_walled_box(tmp_path, mdanalysis_reads_metres):
     path = tmp_path / "walls.h5"
     write_file(path, periodic=(False, False, False))
