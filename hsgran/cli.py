@@ -729,6 +729,38 @@ def cmd_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_fields_parser(sub) -> None:
+    p = sub.add_parser(
+        "fields", help="profiles of packing fraction, velocity, granular temperature and "
+                       "kinetic stress along an axis",
+        description=_paragraphs(
+            "Coarse-grain a trajectory of 'hsgran run' in slabs normal to an axis, each sphere "
+            "counted with the exact fraction of its volume in each slab, averaged over the "
+            "frames of a time window (hsgran.fields). Prints a table, or writes CSV."))
+    p.add_argument("trajectory", metavar="OUT.h5", help="trajectory file (with a box)")
+    p.add_argument("--axis", default="z", help="x, y or z (default z)")
+    p.add_argument("--bins", metavar="B", default="20", help="number of slabs (default 20)")
+    p.add_argument("--from", dest="start", metavar="T0", help="start of the window [s]")
+    p.add_argument("--to", dest="end", metavar="T1", help="end of the window [s]")
+    p.add_argument("--csv", metavar="FILE", help="write the profiles as CSV instead")
+
+
+def cmd_fields(args: argparse.Namespace) -> int:
+    """``hsgran fields``: slab profiles of a trajectory."""
+    from hsgran.fields import profiles, table, write_csv
+
+    bins = _number(args.bins, "--bins", "a whole number >= 1", lambda x: x >= 1 and x == int(x))
+    p = profiles(args.trajectory, args.axis, int(bins),
+                 start=_number(args.start, "--from", "a finite number"),
+                 end=_number(args.end, "--to", "a finite number"))
+    if args.csv:
+        write_csv(p, args.csv)
+        print(f"wrote {args.csv}: {p.centres.shape[0]} slabs, {p.frames} frames")
+    else:
+        print(table(p))
+    return 0
+
+
 def _add_plot_parser(sub) -> None:
     p = sub.add_parser(
         "plot", help="plot energies (and, for a few particles, height, speed, spin) vs time, "
@@ -808,6 +840,7 @@ HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "run": cmd_run,
     "render": cmd_render,
     "export": cmd_export,
+    "fields": cmd_fields,
     "plot": cmd_plot,
     "validate": cmd_validate,
     "sweep": cmd_sweep,
@@ -827,6 +860,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_run_parser(sub)
     _add_render_parser(sub)
     _add_export_parser(sub)
+    _add_fields_parser(sub)
     _add_plot_parser(sub)
     add_validate_parser(sub)
     add_sweep_parser(sub)

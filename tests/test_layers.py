@@ -41,6 +41,7 @@ LAYERS = {
     "animation": 6,
     "plot": 6,
     "export": 6,
+    "fields": 6,
     "validate": 6,
     "validation.": 6,
     "cli": 6,
