@@ -31,10 +31,10 @@ from dataclasses import dataclass, fields
 
 from hsgran.errors import InputError, did_you_mean
 
-#: Which effect needs which other effect to make sense.
 #: Effects of physics beyond the paper: never on unless a scene or call names them.
 BEYOND_PAPER = ("tangential_compliance", "viscoelastic_damping")
 
+#: Which effect needs which other effect to make sense.
 REQUIRES = {
     "friction": ("rotation",),
     "rolling_resistance": ("friction",),
