@@ -28,7 +28,7 @@ import numpy as np
 
 from hsgran import __version__
 from hsgran.effects import BEYOND_PAPER, Effects
-from hsgran.errors import EXIT_BAD_INPUT, InputError, did_you_mean
+from hsgran.errors import EXIT_BAD_INPUT, InputError, MissingDependency, did_you_mean
 from hsgran.impact import (
     SOLID_SPHERE_INERTIA,
     ImpactResult,
@@ -667,23 +667,18 @@ def _add_render_parser(sub) -> None:
 
 def cmd_render(args: argparse.Namespace) -> int:
     """``hsgran render``: movie, frames or still of a trajectory."""
-    from hsgran.errors import MissingDependency
     from hsgran.render import DEFAULT_FPS, DEFAULT_SIZE, render
 
     size = DEFAULT_SIZE if args.size is None else _size(args.size)
     fps = DEFAULT_FPS if args.fps is None else _positive(args.fps, "--fps")
-    try:
-        result = render(
-            args.trajectory, args.output, frames_dir=args.frames,
-            at=_number(args.at, "--at", "a finite number"),
-            start=_number(args.start, "--start", "a finite number"),
-            end=_number(args.end, "--end", "a finite number"),
-            fps=fps, size=size, camera=args.camera, color_by=args.color_by,
-            time_scale=_positive(args.time_scale, "--time-scale"), spheres=args.spheres,
-            force=args.force, progress=not args.no_progress)
-    except MissingDependency as exc:
-        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    result = render(
+        args.trajectory, args.output, frames_dir=args.frames,
+        at=_number(args.at, "--at", "a finite number"),
+        start=_number(args.start, "--start", "a finite number"),
+        end=_number(args.end, "--end", "a finite number"),
+        fps=fps, size=size, camera=args.camera, color_by=args.color_by,
+        time_scale=_positive(args.time_scale, "--time-scale"), spheres=args.spheres,
+        force=args.force, progress=not args.no_progress)
     width, height = result.size
     what = ("still" if result.kind == "png" else
             f"{result.frames} frames, {result.frames / result.fps:.1f} s of video at "
@@ -714,17 +709,12 @@ def _add_export_parser(sub) -> None:
 
 def cmd_export(args: argparse.Namespace) -> int:
     """``hsgran export``: a trajectory for ParaView or OVITO."""
-    from hsgran.errors import MissingDependency
     from hsgran.export import export
 
     every = 1 if args.every is None else _number(args.every, "--every", "a whole number >= 1",
                                                  lambda x: x >= 1 and x == int(x))
-    try:
-        result = export(args.trajectory, args.format, args.output, every=int(every),
-                        force=args.force)
-    except MissingDependency as exc:
-        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    result = export(args.trajectory, args.format, args.output, every=int(every),
+                    force=args.force)
     print(f"wrote {result.output}: {result.frames} frames, {len(result.files)} files")
     return 0
 
@@ -784,14 +774,9 @@ def _add_plot_parser(sub) -> None:
 
 def cmd_plot(args: argparse.Namespace) -> int:
     """``hsgran plot``: energies and few-particle histories of a trajectory."""
-    from hsgran.errors import MissingDependency
     from hsgran.plot import plot
 
-    try:
-        output = plot(args.trajectory, args.output, particles=args.particles, force=args.force)
-    except MissingDependency as exc:
-        print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+    output = plot(args.trajectory, args.output, particles=args.particles, force=args.force)
     print(f"wrote {output}")
     return 0
 
@@ -904,7 +889,7 @@ def main(argv: list[str] | None = None) -> int:
             raise InputError(f"missing command: one of {', '.join(HANDLERS)} "
                              f"(see '{PROG} --help')")
         return HANDLERS[args.command](args)
-    except InputError as exc:
+    except (InputError, MissingDependency) as exc:  # bad input, or an extra not installed
         print(f"{PROG}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
 

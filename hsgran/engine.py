@@ -296,6 +296,7 @@ class Simulation:
         self.mass = np.ascontiguousarray(scene.mass(), dtype=np.float64)  # [kg]
         self.inertia = SOLID_SPHERE_INERTIA * self.mass * scene.radius**2  # [kg m²]
         self.pair_table = np.ascontiguousarray(scene.pair_table())
+        self.notes = scene_notes(scene, self.pair_table)  #: see RunSummary.notes
         origin, csize, ncell, box_len = _grid_plan(scene, brute_force)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
         sizes = Sizes(n=n, gravity=bool(eff.gravity), rotation=self.rotation,
@@ -618,8 +619,7 @@ class Simulation:
         summary = RunSummary(events=events, simulated_time=min(self.time, t_end), wall_time=wall,
                              collisions=events["pair"] + events["wall"],
                              events_per_second=executed / wall if wall > 0 else math.inf,
-                             interrupted=interrupted,
-                             notes=scene_notes(self.scene, self.pair_table))
+                             interrupted=interrupted, notes=list(self.notes))
         for ob in observers:
             if hasattr(ob, "on_finish"):
                 ob.on_finish(summary)

@@ -125,8 +125,8 @@ def _write_xyz(traj, states, frames, out: Path, force: bool) -> ExportResult:
         atoms.info["step"] = int(traj.step[f])
         atoms.info["units"] = XYZ_UNITS
         for name, values in _particle_arrays(traj, states, f).items():
-            scale = unit if name in ("radius", "velocity") else 1.0
-            atoms.new_array(name, np.asarray(values) / scale if scale != 1.0
+            lengths = name in ("radius", "velocity")  # in µm and µm/s; the rest as they are
+            atoms.new_array(name, np.asarray(values) / unit if lengths
                             else np.array(values, copy=True))
         images.append(atoms)
     tmp = out.with_name(out.name + ".part")
