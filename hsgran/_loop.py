@@ -48,6 +48,7 @@ from hsgran._flight import (
     tc_row,
 )
 from hsgran._jit import njit, prefetch
+from hsgran._observe import book_pair, book_support, book_wall, close_interval, momentum, observing
 from hsgran._predict import predict, predict_fn, prefetch_cells, repredict_later
 from hsgran._settling import (
     SETTLE_NONE,
@@ -218,10 +219,11 @@ def _prefetch_next(cal, ev_t, st, cell, n):
 
 
 @njit(inline="always")
-def _on_frame(t, flight, dyn, sched, out, fsc, isc, counts, flags, grav_on):
+def _on_frame(t, flight, dyn, walls, space, sched, out, fsc, isc, counts, flags, grav_on):
     """Frame tick at time t [s]: sample every sphere's flight at t into the frame buffer, leave
     the stored states alone, and schedule the next tick. ``fr_ms`` takes every sphere's
-    motion state (``MS_*``, ``MS_ASLEEP`` for a sleeper; left at flight without gravity)."""
+    motion state (``MS_*``, ``MS_ASLEEP`` for a sleeper; left at flight without gravity); with
+    observables on, the frame closes their interval (hsgran._observe)."""
     st, acc, mstate, mplane = flight.st, flight.acc, flight.mstate, flight.mplane
     omg, alpha = dyn.omg, dyn.alpha
     fr_time, fr_pos, fr_vel, fr_omg, fr_ms = out.fr_time, out.fr_pos, out.fr_vel, out.fr_omg, \
@@ -245,6 +247,8 @@ def _on_frame(t, flight, dyn, sched, out, fsc, isc, counts, flags, grav_on):
             fr_omg[f, j, 0] = omg[j, 0] + alpha[j, 0] * dt if grav_on else omg[j, 0]
             fr_omg[f, j, 1] = omg[j, 1] + alpha[j, 1] * dt if grav_on else omg[j, 1]
             fr_omg[f, j, 2] = omg[j, 2] + alpha[j, 2] * dt if grav_on else omg[j, 2]
+    if observing(dyn):
+        close_interval(f, t, flight, dyn, walls, space, out, grav_on)
     isc[I_N_FRAMES] = f + 1
     isc[I_FRAME_INDEX] += 1
     sched.ev_t[n] = isc[I_FRAME_INDEX] * fsc[F_FRAME_DT]
@@ -314,6 +318,17 @@ def _pair_handler(grav_on):
         dz = min_image(st[i, 2] - st[j, 2], 2, box_len, periodic)
         dist = math.sqrt(dx * dx + dy * dy + dz * dz)
         nx, ny, nz = dx / dist, dy / dist, dz / dist
+        obs_on = observing(dyn)
+        if obs_on:
+            if grav_on:
+                book_support(i, t, flight, dyn, walls, space)
+                book_support(j, t, flight, dyn, walls, space)
+            p_i = momentum(i, st, dyn.inv_m)
+            p_j = momentum(j, st, dyn.inv_m)
+        else:
+            p_i = p_j = (0.0, 0.0, 0.0)
+        free_i = not grav_on or mstate[i] == MS_FLIGHT
+        free_j = not grav_on or mstate[j] == MS_FLIGHT
         if grav_on and flags[FL_CLUSTERS] and cluster_collision(
                 i, j, -1, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
                 rec, flags) == CL_SOLVED:
@@ -371,6 +386,8 @@ def _pair_handler(grav_on):
             if _collapsed(isc, zstreak, i, j):
                 return STATUS_COLLAPSE
             return GO_ON
+        if obs_on:
+            book_pair(i, j, p_i, p_j, free_i, free_j, dx, dy, dz, flight, dyn, grav_on)
         counter[i] += 1
         counter[j] += 1
         note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
@@ -401,6 +418,13 @@ def _wall_handler(grav_on):
         w = np.int64(ev_partner[i])
         note_progress(i, t, st, zstreak)
         advance(st, acc, omg, alpha, i, t, grav_on, rotation)
+        obs_on = observing(dyn)
+        if obs_on:
+            if grav_on:
+                book_support(i, t, flight, dyn, walls, space)
+            p_i = momentum(i, st, dyn.inv_m)
+        else:
+            p_i = (0.0, 0.0, 0.0)
         if grav_on and flags[FL_CLUSTERS] and cluster_collision(
                 i, -1, w, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
                 rec, flags) == CL_SOLVED:
@@ -440,6 +464,8 @@ def _wall_handler(grav_on):
             if _collapsed(isc, zstreak, i, -1):
                 return STATUS_COLLAPSE
             return GO_ON
+        if obs_on:
+            book_wall(i, w, p_i, flight, dyn, walls, grav_on)
         if landed:
             counts[EV_LAND] += 1
         counter[i] += 1
@@ -578,7 +604,8 @@ def _loop_of(grav_on):
                     return STATUS_DONE
             fsc[F_T_CUR] = t
             if e == n:
-                r = _on_frame(t, flight, dyn, sched, out, fsc, isc, counts, flags, grav_on)
+                r = _on_frame(t, flight, dyn, walls, space, sched, out, fsc, isc, counts, flags,
+                              grav_on)
             else:
                 i = e
                 kind = ev_kind[i]

@@ -39,6 +39,7 @@ from hsgran._flight import (
     tc_row,
 )
 from hsgran._jit import njit
+from hsgran._observe import book_support, observing
 from hsgran._predict import axis_cells, reschedule_fn
 from hsgran._state import (
     F_LANDING_SPEED,
@@ -225,6 +226,17 @@ def _fall_asleep(a, b, flight, dyn, rotation):
 @njit
 def wake_sleepers(s, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation):
     """Sphere s was at rest and has been hit: every sphere asleep on it, and on those, falls."""
+    if observing(dyn):
+        # their supports so far, booked down the chains through s while those still stand
+        _visit_sleepers(s, t, False, flight, dyn, walls, space, grid, sched, isc, grav_on,
+                        rotation)
+    _visit_sleepers(s, t, True, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation)
+
+
+@njit
+def _visit_sleepers(s, t, wake, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation):
+    """Every sphere asleep on sphere s, and on those: wake each (``wake``), or book its
+    supports (hsgran._observe.book_support)."""
     st, counter, acc = flight.st, flight.counter, flight.acc
     mstate, mplane = flight.mstate, flight.mplane
     omg, alpha = dyn.omg, dyn.alpha
@@ -246,12 +258,15 @@ def wake_sleepers(s, t, flight, dyn, walls, space, grid, sched, isc, grav_on, ro
                     q = np.int64(head[(ac[0, x] * ncell[1] + ac[1, y]) * ncell[2] + ac[2, z]])
                     while q >= 0:
                         if mstate[q] == MS_REST and mplane[q] == -2 - b:
-                            advance(st, acc, omg, alpha, q, t, grav_on, rotation)
-                            leave_plane(q, flight, dyn, gravity, rotation)
-                            mplane[q] = -1
-                            counter[q] += 1
-                            reschedule_fn(q, t, flight, walls, space, grid, sched, isc,
-                                           grav_on)
+                            if wake:
+                                advance(st, acc, omg, alpha, q, t, grav_on, rotation)
+                                leave_plane(q, flight, dyn, gravity, rotation)
+                                mplane[q] = -1
+                                counter[q] += 1
+                                reschedule_fn(q, t, flight, walls, space, grid, sched, isc,
+                                               grav_on)
+                            else:
+                                book_support(q, t, flight, dyn, walls, space)
                             stack[top] = q
                             top += 1
                         q = np.int64(nxt[q])

@@ -35,8 +35,9 @@ Flight = namedtuple("Flight", "st counter acc mstate mplane seg_end seg_code pc_
 #: advancing (collapse guard); ``alpha`` [rad/s²] and ``seg_dir`` (the direction a segment's end
 #: refers to) only with gravity; ``t_last`` time of the last collision [s] (TC model);
 #: ``row_tc`` scratch pair row for an elastic TC collision; ``rapid`` collisions in succession
-#: within the TC time (jams).
-Dyn = namedtuple("Dyn", "omg inv_m inv_i mat zstreak alpha seg_dir t_last row_tc rapid")
+#: within the TC time (jams). With observables on (hsgran._observe): ``led`` each sphere's
+#: momentum ledger [kg m/s] and ``obs`` the sums of the current frame interval (``OB_*``).
+Dyn = namedtuple("Dyn", "omg inv_m inv_i mat zstreak alpha seg_dir t_last row_tc rapid led obs")
 #: The planes: a point [m], unit normal, material, velocity [m/s] and angular velocity [rad/s].
 Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg")
 #: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic; ``slack``: a
@@ -66,8 +67,9 @@ Clus = namedtuple("Clus", "cl_body cl_loc cl_was cl_depth cl_inv_m cl_inv_i cl_r
                           "ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr")
 #: Output buffers: frame times [s], positions [m], velocities [m/s], spins [rad/s], the event
 #: log (floats ``log_f``: time, J_n, J_t, e_n; ints ``log_i``: kind, i, j, stage, regime) and
-#: motion states per frame.
-Out = namedtuple("Out", "fr_time fr_pos fr_vel fr_omg log_f log_i fr_ms")
+#: motion states per frame; with observables on, ``fr_obs`` the sums ``obs`` of the interval
+#: each frame closes.
+Out = namedtuple("Out", "fr_time fr_pos fr_vel fr_omg log_f log_i fr_ms fr_obs")
 
 #: The groups in the order the loop takes them.
 GROUPS = (Flight, Dyn, Walls, Space, Grid, Sched, Clus, Out)
@@ -119,6 +121,19 @@ I_SWEEPS = 9  #: Gauss–Seidel sweeps of the cluster solves so far (hsgran._clu
 I_SHORT = 10  #: cluster segments cut to the shortest (MIN_SEGMENT_REL)
 I_UNSOLVED = 11  #: cluster force solves that ended short of the slack (not converged)
 I_SIZE = 12
+
+# the sums of one frame interval (``obs``, hsgran._observe), observables on only
+OB_MOMENT = 0  #: Σ b ⊗ J over the contacts' impulses [kg m²/s], 3 × 3 row-major (9 entries)
+OB_N_PAIR = 9  #: sphere–sphere collisions
+OB_N_WALL = 10  #: sphere–plane collisions
+#: impulse the spheres gave each plane [N s], 3 per plane, then 3 for the support that could
+#: not be traced to a plane
+OB_WALL = 11
+
+
+def obs_size(planes: int) -> int:
+    """Entries of ``obs`` for a scene of ``planes`` planes."""
+    return OB_WALL + 3 * (planes + 1)
 
 # effect and engine switches: the ``flags`` argument, a bool array of FL_SIZE entries. They are
 # run-time values, so one compiled loop serves every scene with gravity and one every scene
@@ -195,6 +210,7 @@ class Sizes:
     frames: int  #: frames in the frame buffer
     log: int  #: entries in the event-log buffer
     clusters: bool = False  #: contacts are solved as clusters (scratch for them)
+    observables: bool = False  #: stress and wall impulses are summed (hsgran._observe)
 
     def value(self, symbol) -> int:
         """The size a shape symbol stands for (an int stands for itself)."""
@@ -217,6 +233,10 @@ class Sizes:
             "cb": min(n, MAX_CLUSTER_BODIES) if self.clusters else 1,
             "ck": CONTACTS_PER_BODY * min(n, MAX_CLUSTER_BODIES) if self.clusters else 1,
             "cn": n if self.clusters else 1,
+            # observables (none when off: hsgran._observe tests the ledger's length)
+            "on": n if self.observables else 0,
+            "ob": obs_size(self.planes) if self.observables else 0,
+            "fo": self.frames if self.observables else 0,
         }[symbol]
 
 
@@ -261,6 +281,8 @@ FIELDS = (
     _f("Dyn", "t_last", "f8", ("m",), fill=-np.inf, packed=True),
     _f("Dyn", "row_tc", "f8", ("row",)),
     _f("Dyn", "rapid", "i4", ("m",), packed=True),
+    _f("Dyn", "led", "f8", ("on", 3)),
+    _f("Dyn", "obs", "f8", ("ob",)),
     _f("Walls", "planes_p", "f8", ("planes", 3)),
     _f("Walls", "planes_n", "f8", ("planes", 3)),
     _f("Walls", "planes_mat", "i8", ("planes",)),
@@ -325,6 +347,7 @@ FIELDS = (
     _f("Out", "log_f", "f8", ("log", 4)),
     _f("Out", "log_i", "i8", ("log", 5)),
     _f("Out", "fr_ms", "i1", ("frames", "n")),
+    _f("Out", "fr_obs", "f8", ("fo", "ob")),
 )
 
 

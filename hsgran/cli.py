@@ -751,6 +751,39 @@ def cmd_fields(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_observables_parser(sub) -> None:
+    p = sub.add_parser(
+        "observables", help="pressure, stress, wall forces and collision rates per frame "
+                            "interval (scenes with [output] observables = true)",
+        description=_paragraphs(
+            "The observables the event loop summed exactly over each frame interval "
+            "(hsgran.observables, docs/observables.md): collisional and kinetic pressure, the "
+            "force on every plane, the support not traced to a plane, and the collision "
+            "rates. Prints each quantity's mean over the intervals from --from on with its "
+            "standard error (block averages), or writes every interval as CSV."))
+    p.add_argument("trajectory", metavar="OUT.h5", help="trajectory file")
+    p.add_argument("--volume", metavar="V", help="volume for the stress [m³] (default: the box)")
+    p.add_argument("--from", dest="start", metavar="T0", default="0",
+                   help="average the intervals that start at or after T0 [s] (default 0)")
+    p.add_argument("--csv", metavar="FILE", help="write every interval as CSV instead")
+
+
+def cmd_observables(args: argparse.Namespace) -> int:
+    """``hsgran observables``: the interval observables of a trajectory."""
+    from hsgran.io.h5md import read_trajectory
+    from hsgran.observables import interval_observables, summary, write_csv
+
+    volume = _number(args.volume, "--volume", "a positive volume in m³", lambda x: x > 0)
+    start = _number(args.start, "--from", "a finite number")
+    obs = interval_observables(read_trajectory(args.trajectory), volume)
+    if args.csv:
+        write_csv(obs, args.csv)
+        print(f"wrote {args.csv}: {obs.start.shape[0]} intervals")
+    else:
+        print(summary(obs, start))
+    return 0
+
+
 def _add_plot_parser(sub) -> None:
     p = sub.add_parser(
         "plot", help="plot energies (and, for a few particles, height, speed, spin) vs time, "
@@ -826,6 +859,7 @@ HANDLERS: dict[str, Callable[[argparse.Namespace], int]] = {
     "render": cmd_render,
     "export": cmd_export,
     "fields": cmd_fields,
+    "observables": cmd_observables,
     "plot": cmd_plot,
     "validate": cmd_validate,
     "sweep": cmd_sweep,
@@ -846,6 +880,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_render_parser(sub)
     _add_export_parser(sub)
     _add_fields_parser(sub)
+    _add_observables_parser(sub)
     _add_plot_parser(sub)
     add_validate_parser(sub)
     add_sweep_parser(sub)

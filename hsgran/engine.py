@@ -66,8 +66,8 @@ EVENTS_PER_CALL = 200_000
 #: version is refused rather than misread (2: the pair contacts kept for cell crossings; 3: the
 #: "wedge" event count; 4: per-sphere fields at least FIELD_MIN long; 5: arrays named by field,
 #: hsgran._state, scratch space no longer stored; 6: the "cluster" event count, the cluster
-#: slack ``Space.slack`` and the cluster scalars).
-CHECKPOINT_VERSION = 6
+#: slack ``Space.slack`` and the cluster scalars; 7: the observables' ledger and sums).
+CHECKPOINT_VERSION = 7
 
 
 class SimulationError(HsgranError):
@@ -95,6 +95,16 @@ class FrameBlock:
     #: friction and rolling resistance on planes, landings and spheres put to rest
     dissipated: np.ndarray
     motion_state: np.ndarray  #: ``hsgran.onplane.MS_*`` of every sphere (F, N) int8
+    # With ``[output] observables`` (else None), the sums over the interval each frame closes
+    # (from the previous frame; zero at the first), hsgran._observe:
+    #: Σ b ⊗ J over every impulse a sphere took at a contact [kg m²/s] (F, 3, 3)
+    impulse_moment: np.ndarray | None = None
+    #: impulse each plane took from the spheres [N s] (F, planes, 3)
+    wall_impulse: np.ndarray | None = None
+    #: support impulse not traced to a plane [N s] (F, 3)
+    unresolved_impulse: np.ndarray | None = None
+    #: pair and plane collisions (F, 2) int64
+    collisions: np.ndarray | None = None
 
 
 @dataclass
@@ -305,7 +315,8 @@ class Simulation:
                       frames=frame_buffer or max(1, min(FRAME_BUFFER_MAX,
                                                         FRAME_BUFFER_BYTES // per_frame)),
                       log=LOG_BUFFER if self.log_events else 1,
-                      clusters=bool(self.flags[es.FL_CLUSTERS]))
+                      clusters=bool(self.flags[es.FL_CLUSTERS]),
+                      observables=bool(scene.observables))
         if large is None:
             large = n >= LARGE_FROM
         a = allocate(sizes, packed=large)
@@ -340,6 +351,9 @@ class Simulation:
         flight, dyn, walls, space, grid, sched = self._groups[:6]
         ev.init(flight, dyn, walls, space, grid, sched, self.pair_table, self.fsc, self.isc,
                 self.flags)
+        if scene.observables:
+            # each sphere's momentum ledger starts at t = 0 (hsgran._observe)
+            self.led[:] = self.mass[:, None] * self.vel
 
         # compile (or load from the cache) now, so run() times only the run: with t_end < 0
         # the loop returns before touching any event
@@ -440,8 +454,17 @@ class Simulation:
         step = np.arange(self._frames_emitted, self._frames_emitted + f, dtype=np.int64)
         self._frames_emitted += f
         self.isc[es.I_N_FRAMES] = 0
-        return FrameBlock(step, self.fr_time[:f].copy(), pos, vel, omg, kin_t, kin_r, pot,
-                          dissipated, self.fr_ms[:f].copy())
+        block = FrameBlock(step, self.fr_time[:f].copy(), pos, vel, omg, kin_t, kin_r, pot,
+                           dissipated, self.fr_ms[:f].copy())
+        if self.scene.observables:
+            sums = self.fr_obs[:f]
+            planes = len(self.scene.planes)
+            block.impulse_moment = sums[:, es.OB_MOMENT:es.OB_MOMENT + 9].reshape(f, 3, 3).copy()
+            block.wall_impulse = sums[:, es.OB_WALL:es.OB_WALL + 3 * planes].reshape(
+                f, planes, 3).copy()
+            block.unresolved_impulse = sums[:, -3:].copy()
+            block.collisions = np.rint(sums[:, [es.OB_N_PAIR, es.OB_N_WALL]]).astype(np.int64)
+        return block
 
     def _event_block(self) -> EventBlock | None:
         m = int(self.isc[es.I_N_LOG])

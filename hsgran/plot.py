@@ -22,6 +22,7 @@ import numpy as np
 from hsgran.errors import InputError, MissingDependency
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
 from hsgran.io.h5md import read_trajectory
+from hsgran.observables import interval_observables
 
 #: Scenes with at most this many particles get the per-particle panels by default; more lines
 #: than this are hard to tell apart.
@@ -127,12 +128,17 @@ def figure(traj, particles: list[int], title: str = ""):
                      ("speed [m/s]", np.linalg.norm(traj.velocity, axis=2))]
         if traj.angular_velocity is not None:
             histories.append(("spin |ω| [rad/s]", np.linalg.norm(traj.angular_velocity, axis=2)))
-    rows = 1 + len(histories)
+    observed = interval_observables(traj) if traj.sums and traj.n_frames >= 2 else None
+    extra = 0 if observed is None else (1 if observed.pressure is None else 2)
+    rows = 1 + extra + len(histories)
     fig = Figure(figsize=(FIGURE_WIDTH, PANEL_HEIGHT * rows + 0.8), layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
     t = traj.time
     _energy_panel(axes[0], traj)
+    if observed is not None:
+        _observables_panels(axes[1:1 + extra], observed)
+        axes = np.concatenate([axes[:1], axes[1 + extra:]])
     notes = []
     events = _events_of(traj, particles) if particles else None
     if particles and traj.events is None:
@@ -178,6 +184,33 @@ def _energy_panel(ax, traj) -> None:
         ax.plot(t, values, color=color, lw=1.5, label=label)
     ax.plot(t, total, color="black", lw=1.0, ls="--", label="sum")
     ax.set_ylabel("energy [J]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(fontsize="small", loc="best")
+
+
+def _observables_panels(axes, obs) -> None:
+    """The normal force on each plane, and (with a volume) the pressure and its kinetic and
+    collisional parts, as steps over the frame intervals (hsgran.observables)."""
+    edges = np.append(obs.start, obs.end[-1])
+    ax = axes[0]
+    for w, key in enumerate(obs.wall_keys):
+        push = -obs.wall_force[:, w] @ obs.wall_normals[w]
+        ax.stairs(push, edges, lw=1.3, label=key, color=f"C{w % 10}")
+    if np.any(obs.unresolved_force):
+        ax.stairs(np.linalg.norm(obs.unresolved_force, axis=1), edges, lw=1.0, ls=":",
+                  color="gray", label="support not traced to a plane (magnitude)")
+    ax.set_ylabel("force on plane,\nnormal [N]")
+    ax.grid(True, alpha=0.3)
+    if obs.wall_keys or np.any(obs.unresolved_force):
+        ax.legend(fontsize="small", loc="best", ncol=2)
+    if obs.pressure is None:
+        return
+    ax = axes[1]
+    kinetic = -np.trace(obs.stress_kinetic, axis1=1, axis2=2) / 3
+    ax.stairs(kinetic, edges, color="C0", lw=1.2, label="kinetic")
+    ax.stairs(obs.pressure - kinetic, edges, color="C1", lw=1.2, label="contacts")
+    ax.stairs(obs.pressure, edges, color="black", lw=1.0, ls="--", label="pressure")
+    ax.set_ylabel("pressure [Pa]")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize="small", loc="best")
 

@@ -156,7 +156,7 @@ DEFAULT_TC_TIME = 1e-5
 ROLLING_CONVENTIONS = {"A": "rolling torque also while sliding",
                        "B": "rolling torque only while rolling"}
 SCENE_KEYS = ("name", "duration", "gravity", "effects", "seed", "periodic")
-OUTPUT_KEYS = ("frame_interval",)
+OUTPUT_KEYS = ("frame_interval", "observables")
 PLANE_KEYS = ("kind", "point", "normal", "material")
 BOX_KEYS = ("kind", "lower", "upper", "material")
 WALL_KINDS = ("plane", "box")
@@ -221,6 +221,8 @@ class Scene:
             solved together), docs/enduring-contact.md.
         overrides: Key path → value changes applied to the file before validation
             (:mod:`hsgran.overrides`); ``text`` then ends with :func:`override_note`.
+        observables: Sum the stress and the wall impulses of every frame interval
+            (``[output] observables``, docs/observables.md).
     """
 
     name: str
@@ -247,6 +249,7 @@ class Scene:
     tc_time: float = DEFAULT_TC_TIME
     treatment: str = "pairwise"
     overrides: dict = field(default_factory=dict)
+    observables: bool = False
 
     @property
     def effective_landing_speed(self) -> float:
@@ -534,7 +537,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     """Check a parsed document part by part and assemble the :class:`Scene`."""
     _check_keys(doc, TOP_KEYS, "")
     head = _parse_head(doc, source)
-    frame_interval = _parse_output(doc, head.duration)
+    frame_interval, observables = _parse_output(doc, head.duration)
     enduring = _parse_enduring(doc)
     library = MaterialLibrary()
     library.add_tables(doc, origin=source)
@@ -594,6 +597,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
         rolling_convention=enduring.rolling_convention,
         tc_time=enduring.tc_time,
         treatment=enduring.treatment,
+        observables=observables,
     )
 
 
@@ -659,9 +663,13 @@ def _parse_enduring(doc: dict) -> _Enduring:
     return _Enduring(landing_speed, tc_time, conv, treatment)
 
 
-def _parse_output(doc: dict, duration: float) -> float:
-    """The frame interval [s]."""
+def _parse_output(doc: dict, duration: float) -> tuple[float, bool]:
+    """The frame interval [s], and whether the observables of docs/observables.md are summed."""
     out = _table(doc.get("output", {}), "output", "a table ([output])")
+    observables = out.get("observables", False)
+    if not isinstance(observables, bool):
+        raise InputError(f"must be true or false, got {short_repr(observables)}",
+                         "output.observables")
     _check_keys(out, OUTPUT_KEYS, "output")
     frame_interval = check_positive(
         _require(out, "frame_interval", "output", "time between frames in s"),
@@ -672,7 +680,7 @@ def _parse_output(doc: dict, duration: float) -> float:
             f"{_fmt(frame_interval)} s gives {frames:.3g} frames over "
             f"{_fmt(duration)} s, more than the limit of {MAX_FRAMES:.0e}",
             "output.frame_interval")
-    return frame_interval
+    return frame_interval, observables
 
 
 def _material_name(library: MaterialLibrary, value, key: str) -> str:

@@ -84,6 +84,9 @@ def same_file(a, b) -> None:
     assert ta.energies.keys() == tb.energies.keys()
     for name in ta.energies:
         np.testing.assert_array_equal(ta.energies[name], tb.energies[name], err_msg=name)
+    assert ta.sums.keys() == tb.sums.keys()
+    for name in ta.sums:
+        np.testing.assert_array_equal(ta.sums[name], tb.sums[name], err_msg=name)
     assert (ta.events is None) == (tb.events is None)
     for name in ta.events or {}:
         np.testing.assert_array_equal(ta.events[name], tb.events[name], err_msg=name)
@@ -127,6 +130,29 @@ def test_a_restored_checkpoint_continues_bit_for_bit():
         np.testing.assert_array_equal(whole.state, again.state)
         np.testing.assert_array_equal(whole.mstate, again.mstate)
         np.testing.assert_array_equal(frames[ck.frames:], np.concatenate(k2.positions))
+
+
+def test_the_observables_continue_bit_for_bit_from_a_checkpoint():
+    """The momentum ledgers and the open interval's sums are part of the checkpoint."""
+    scene = parse_scene(pile(30, duration=0.06).replace(
+        "frame_interval = 0.0005", "frame_interval = 0.0005\nobservables = true"))
+    names = ("impulse_moment", "wall_impulse", "unresolved_impulse", "collisions")
+
+    class Sums(Keep):
+        def on_frames(self, block):
+            self.positions.append([getattr(block, name) for name in names])
+
+    whole, keep = Simulation(scene), Sums()
+    whole.run(observers=[keep], checkpoint_every=0.0137)
+    ck = keep.checkpoints[2]
+    again, k2 = Simulation(scene), Sums()
+    again.restore(ck)
+    again.run(observers=[k2])
+    for k, name in enumerate(names):
+        full = np.concatenate([b[k] for b in keep.positions])
+        np.testing.assert_array_equal(full[ck.frames:],
+                                      np.concatenate([b[k] for b in k2.positions]), name)
+    assert np.abs(np.concatenate([b[1] for b in keep.positions])).sum() > 0
 
 
 def test_resume_from_the_api_writes_the_file_of_an_uninterrupted_run(tmp_path):

@@ -102,6 +102,9 @@ UNIT_IMPULSE = "kg m s-1"
 
 #: Stands for the number of particles in :attr:`FrameField.shape`.
 PER_PARTICLE = "N"
+#: Shape symbol: the number of plane walls (:class:`Walls`).
+PER_WALL = "W"
+UNIT_IMPULSE_MOMENT = "kg m2 s-1"
 
 
 @dataclass(frozen=True)
@@ -113,9 +116,11 @@ class FrameField:
             its ``step`` and ``time`` are hard links to the position's.
         unit: H5MD unit string, or ``None`` for codes.
         dtype: Type stored.
-        shape: Shape of one frame's row, :data:`PER_PARTICLE` standing for N.
+        shape: Shape of one frame's row, :data:`PER_PARTICLE` standing for N and
+            :data:`PER_WALL` for the number of planes.
         switch: Argument of :class:`TrajectoryWriter` that turns the field on
-            (``angular_velocity``, ``motion_state``), or ``None`` when every file has it.
+            (``angular_velocity``, ``motion_state``, ``observables``), or ``None`` when every
+            file has it.
     """
 
     path: str
@@ -124,9 +129,10 @@ class FrameField:
     shape: tuple
     switch: str | None = None
 
-    def row_shape(self, n_particles: int) -> tuple:
-        """Shape of one frame's row for ``n_particles`` particles."""
-        return tuple(n_particles if d == PER_PARTICLE else d for d in self.shape)
+    def row_shape(self, n_particles: int, n_walls: int = 0) -> tuple:
+        """Shape of one frame's row for ``n_particles`` particles and ``n_walls`` planes."""
+        size = {PER_PARTICLE: n_particles, PER_WALL: n_walls}
+        return tuple(size.get(d, d) for d in self.shape)
 
 
 #: Every per-frame quantity besides ``step`` and ``time``, by its name in a block of frames
@@ -149,14 +155,28 @@ FRAME_FIELDS = {
                                      np.float64, (), "angular_velocity"),
     "potential": FrameField(f"{OBSERVABLES}/potential_energy", UNIT_ENERGY, np.float64, ()),
     "dissipated": FrameField(f"{OBSERVABLES}/dissipated_energy", UNIT_ENERGY, np.float64, ()),
+    # sums over the interval that each frame closes (docs/observables.md)
+    "impulse_moment": FrameField(f"{OBSERVABLES}/impulse_moment", UNIT_IMPULSE_MOMENT,
+                                 np.float64, (3, 3), "observables"),
+    "wall_impulse": FrameField(f"{OBSERVABLES}/wall_impulse", UNIT_IMPULSE, np.float64,
+                               (PER_WALL, 3), "observables"),
+    "unresolved_impulse": FrameField(f"{OBSERVABLES}/unresolved_support_impulse", UNIT_IMPULSE,
+                                     np.float64, (3,), "observables"),
+    "collisions": FrameField(f"{OBSERVABLES}/collisions", None, np.int64, (2,), "observables"),
 }
 #: The element whose ``step`` and ``time`` datasets every other element links to.
 CLOCK = "position"
-#: Observable name in the file → field of a block of frames (:data:`FRAME_FIELDS`).
+#: Observable name in the file → field of a block of frames (:data:`FRAME_FIELDS`): the
+#: energies (:attr:`Trajectory.energies`) and the interval sums (:attr:`Trajectory.sums`).
 ENERGY_OBSERVABLES = {
     spec.path.rsplit("/", 1)[1]: name
     for name, spec in FRAME_FIELDS.items()
-    if spec.path.startswith(OBSERVABLES + "/")
+    if spec.path.startswith(OBSERVABLES + "/") and spec.unit == UNIT_ENERGY
+}
+SUM_OBSERVABLES = {
+    spec.path.rsplit("/", 1)[1]: name
+    for name, spec in FRAME_FIELDS.items()
+    if spec.path.startswith(OBSERVABLES + "/") and spec.switch == "observables"
 }
 
 #: Event-log datasets: name → (dtype, unit or None).
@@ -247,6 +267,11 @@ class Trajectory:
         overrides: Key path → value changes the scene was run with.
         pair_table: The contact-law parameters of every pair of materials the engine used,
             shape (M, M, K) (``hsgran.materials.pair_row``), or ``None`` when not stored.
+        sums: With ``[output] observables``, the sums over the interval each frame closes, by
+            observable name (``impulse_moment`` [kg m²/s] (F, 3, 3), ``wall_impulse`` [N s]
+            (F, W, 3), ``unresolved_support_impulse`` [N s] (F, 3), ``collisions`` (F, 2):
+            pair, plane); empty otherwise. :mod:`hsgran.observables` turns them into stress,
+            pressure and wall forces.
     """
 
     time: np.ndarray
@@ -275,6 +300,7 @@ class Trajectory:
     scene_name: str = ""
     overrides: dict = field(default_factory=dict)
     pair_table: np.ndarray | None = None
+    sums: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def n_frames(self) -> int:
@@ -345,6 +371,7 @@ class TrajectoryWriter:
         log_events: bool,
         creator_args: str = "",
         motion_state: bool = False,
+        observables: bool = False,
         checkpoint_layout: dict | None = None,
         overrides: dict | None = None,
         walls: Walls | None = None,
@@ -396,11 +423,15 @@ class TrajectoryWriter:
 
         self.path = os.fspath(path)
         self.n_particles = n
+        #: planes of the observables' wall rows (:data:`PER_WALL`)
+        self.n_walls = 0 if walls is None else len(walls)
         self.has_angular_velocity = bool(angular_velocity)
         self.has_motion_state = bool(motion_state)
         #: The switches of :attr:`FrameField.switch`.
+        self.has_observables = bool(observables)
         self._switches = {"angular_velocity": self.has_angular_velocity,
-                          "motion_state": self.has_motion_state}
+                          "motion_state": self.has_motion_state,
+                          "observables": self.has_observables}
         self.has_events = bool(log_events)
         self.has_edges = any(periodic)
         self._edges = None if box_lower is None else box_upper - box_lower
@@ -499,7 +530,8 @@ class TrajectoryWriter:
             if spec.switch is not None and not self._switches[spec.switch]:
                 continue
             group = clock if name == CLOCK else self._element(f, spec.path)
-            self._values[name] = _create_value(group, spec.row_shape(n), spec.dtype, spec.unit)
+            self._values[name] = _create_value(group, spec.row_shape(n, self.n_walls),
+                                               spec.dtype, spec.unit)
 
         box = particles.create_group("box")
         box.attrs["dimension"] = np.int32(3)
@@ -603,7 +635,7 @@ class TrajectoryWriter:
             if (given is None) != (dset is None):
                 raise ValueError(_optional_message(name, spec.switch, dset is not None))
             if dset is not None:
-                shape = (n_new, *spec.row_shape(self.n_particles))
+                shape = (n_new, *spec.row_shape(self.n_particles, self.n_walls))
                 values.append((dset, _checked(given, name, shape, spec.dtype)))
         if n_new == 0:
             return
@@ -984,6 +1016,8 @@ def _read(f: h5py.File) -> Trajectory:
                     if spec.path.startswith(PARTICLES + "/")}
     energies = {observable: values[name] for observable, name in ENERGY_OBSERVABLES.items()
                 if name in values}
+    sums = {observable: values[name] for observable, name in SUM_OBSERVABLES.items()
+            if name in values}
 
     params = f[PARAMETERS].attrs
     boundary = [_text(b) for b in particles["box"].attrs["boundary"]]
@@ -1016,6 +1050,7 @@ def _read(f: h5py.File) -> Trajectory:
         scene_name=_text(params.get("scene_name", "")),
         overrides=json.loads(_text(params.get("overrides", "{}"))),
         pair_table=_read_pair_table(f[PARAMETERS]),
+        sums=sums,
     )
 
 
