@@ -19,6 +19,8 @@ from hsgran._state import F_CHI, F_TC_TIME, S_R, S_T, S_V
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, approach_noise, flight_position
 from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
+from hsgran.wallmotion import wall_shift, wall_speed
+from hsgran.wallspec import M_DIR, M_KIND, MOT_FIXED
 
 #: A sphere whose gap to a plane is within this fraction of its radius counts as touching it
 #: [-]: a gap of 1e-10 R is far above the rounding of a position dotted with a normal (~1e-16 of
@@ -195,6 +197,30 @@ def stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, 
     enter_plane(p, np.int64(flight.mplane[p]), t, np.int64(END_NONE), flight, dyn, walls, gravity,
                  pair_table, fsc, friction, rolling, rotation)
     flight.counter[p] += 1
+
+
+@njit(inline="always")
+def moving(walls, w):
+    """Whether plane w has a prescribed motion (hsgran.wallmotion)."""
+    return walls.planes_mot[w, M_KIND] != MOT_FIXED
+
+
+@njit(inline="always")
+def moving_gap(x, y, z, r, walls, w, t):
+    """Gap [m] between a sphere of radius r [m] at (x, y, z) [m] and moving plane w at time t
+    [s], and d·n, the share of the plane's motion along its normal."""
+    mot, n = walls.planes_mot, walls.planes_n
+    cn = mot[w, M_DIR] * n[w, 0] + mot[w, M_DIR + 1] * n[w, 1] + mot[w, M_DIR + 2] * n[w, 2]
+    return (plane_gap(x, y, z, r, walls.planes_p, n, w) - cn * wall_shift(mot, w, t)), cn
+
+
+@njit(inline="always")
+def set_wall_velocity(walls, w, t):
+    """Store moving plane w's velocity at time t [s] in ``planes_vel[w]`` [m/s] (what the
+    collision model reads as the wall's velocity)."""
+    speed = wall_speed(walls.planes_mot, w, t)
+    for k in range(3):
+        walls.planes_vel[w, k] = speed * walls.planes_mot[w, M_DIR + k]
 
 
 @njit(inline="always")

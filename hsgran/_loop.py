@@ -36,14 +36,18 @@ import numpy as np
 from hsgran._cluster import CL_SOLVED, cluster_collision, cluster_resolve
 from hsgran._flight import (
     MAX_ZERO_TIME_EVENTS,
+    PLANE_TOUCHING_REL,
     START_GAP_REL,
     advance,
     approaching,
     enter_plane,
     min_image,
+    moving,
+    moving_gap,
     note_progress,
     plane_gap,
     pressed,
+    set_wall_velocity,
     state_at,
     tc_row,
 )
@@ -182,6 +186,8 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
         # landing speed, pressed on by gravity) start in an on-plane state
         for i in range(st.shape[0]):
             for w in range(planes_p.shape[0]):
+                if moving(walls, w):
+                    continue  # no sphere rests on a moving plane
                 gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)
                 gn, vn = pressed(i, w, st, walls, space.gravity)
                 if (abs(gap) <= START_GAP_REL * st[i, S_R] and gn > 0.0
@@ -418,6 +424,17 @@ def _wall_handler(grav_on):
         w = np.int64(ev_partner[i])
         note_progress(i, t, st, zstreak)
         advance(st, acc, omg, alpha, i, t, grav_on, rotation)
+        if moving(walls, w):
+            gap, _ = moving_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], walls, w, t)
+            if gap > PLANE_TOUCHING_REL * st[i, S_R]:
+                # the search for the contact stopped short of it (hsgran.wallmotion
+                # MAX_ADVANCE_STEPS): no contact yet, predicted again from here
+                repredict_later(isc, i)
+                counts[EV_MISS] += 1
+                if _collapsed(isc, zstreak, i, -1):
+                    return STATUS_COLLAPSE
+                return GO_ON
+            set_wall_velocity(walls, w, t)
         obs_on = observing(dyn)
         if obs_on:
             if grav_on:

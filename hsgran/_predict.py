@@ -9,7 +9,7 @@ pair event whose partner has moved on since is known to be stale (lazy invalidat
 
 from __future__ import annotations
 
-from hsgran._flight import PLANE_TOUCHING_REL, TOUCH_REL, plane_gap, state_at
+from hsgran._flight import PLANE_TOUCHING_REL, TOUCH_REL, moving, moving_gap, plane_gap, state_at
 from hsgran._jit import njit, prefetch
 from hsgran._state import I_PEND_A, I_PEND_B, I_SEQ, S_R
 from hsgran.events.calendar import calendar_update, has_buckets
@@ -22,6 +22,7 @@ from hsgran.motion import (
     plane_contact_time,
 )
 from hsgran.onplane import MS_FLIGHT, MS_SUPPORTED
+from hsgran.wallmotion import moving_plane_contact_time
 
 #: Cells a crossed axis needs for the crossing to look only at the new layer of neighbouring
 #: cells (see predict): with 1 or 2 the lists of that axis are not neighbour layers.
@@ -198,6 +199,16 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
         nx = planes_n[w, 0]
         ny = planes_n[w, 1]
         nz = planes_n[w, 2]
+        if moving(walls, w):
+            gap, cn = moving_gap(xi, yi, zi, ri, walls, w, t_now)
+            tau = moving_plane_contact_time(
+                gap, ui * nx + vi * ny + wi * nz, gi[0] * nx + gi[1] * ny + gi[2] * nz,
+                walls.planes_mot, w, cn, t_now, ri, best)
+            if tau < best:
+                best = tau
+                kind = EV_WALL
+                partner = w
+            continue
         gap = plane_gap(xi, yi, zi, ri, planes_p, planes_n, w)
         if gap <= PLANE_TOUCHING_REL * ri:
             # touching within rounding: a contact now if approaching or pressed (a gap of

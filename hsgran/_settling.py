@@ -33,6 +33,7 @@ from hsgran._flight import (
     halt,
     leave_plane,
     min_image,
+    moving,
     plane_gap,
     pressed,
     stop_on_plane,
@@ -412,6 +413,8 @@ def _resting_plane(i, st, walls, gravity, v_land):
     ever came back to the plane."""
     planes_p, planes_n = walls.planes_p, walls.planes_n
     for w in range(planes_p.shape[0]):
+        if moving(walls, w):
+            continue  # no sphere rests on a moving plane
         gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)
         if gap <= PLANE_TOUCHING_REL * st[i, S_R]:
             gn, vn = pressed(i, w, st, walls, gravity)
@@ -639,6 +642,8 @@ def lands_before_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, fla
     instead (MODEL §5.3; what is given up is the rebound, at most ½ m v_land², see
     hsgran.scene). It is then put on the plane."""
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
+    if moving(walls, w):
+        return False  # no sphere rests on a moving plane
     gn, vn = pressed(i, w, flight.st, walls, gravity)
     if not (gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]):
         return False
@@ -654,7 +659,8 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     """Collide sphere i with plane w under gravity, with the enduring-contact rules [OURS]: a
     sphere on another plane is backed by it (a sphere sliding into a side wall), one knocked
     off its plane flies, one whose rebound is slower than the landing speed lands, and a
-    sphere wedged in a zero-time sequence is stopped (planes never move: immovable).
+    sphere wedged in a zero-time sequence is stopped (an immovable plane). A moving plane hits
+    with its velocity at t, and holds no sphere: no landing, no wedge stop.
 
     Returns:
         (hit, tc_on, landed, wedged): whether the collision was executed (False: the re-check
@@ -682,6 +688,7 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     inv_mi = inv_m[i] * (1.0 - ci * ci) if ci >= 0.0 else inv_m[i]
     row, tc_on = tc_row(pair_table[dyn.mat[i], planes_mat[w]], t, dyn.t_last[i], -NEVER, fsc,
                         dyn.row_tc)
+    driven = moving(walls, w)  # its velocity at t is in planes_vel[w] (the wall handler)
     hit = resolve(st[i, S_V:S_V + 3], wi, walls.planes_vel[w], walls.planes_omg[w],
                   planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0, dyn.inv_i[i],
                   0.0, ri, 0.0, 1.0 / ri, row, rec, plasticity, friction, rolling, adhesion,
@@ -700,11 +707,12 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
         if mstate[i] != MS_FLIGHT:
             leave_plane(i, flight, dyn, gravity, rotation)  # knocked off its plane
         gn, vn = pressed(i, w, st, walls, gravity)
-        if gn > 0.0 and vn <= fsc[F_LANDING_SPEED]:
+        if gn > 0.0 and vn <= fsc[F_LANDING_SPEED] and not driven:
             enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
                         rolling, rotation)
             landed = True
-    # a zero-time sequence against this plane (planes never move: immovable)
-    wedged = not landed and _wedge_stop(i, t, flight, dyn, walls, gravity, pair_table, fsc,
-                                        friction, rolling, rotation)
+    # a zero-time sequence against this plane (an immovable one)
+    wedged = not landed and not driven and _wedge_stop(i, t, flight, dyn, walls, gravity,
+                                                       pair_table, fsc, friction, rolling,
+                                                       rotation)
     return True, tc_on, landed, wedged

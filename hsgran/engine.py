@@ -66,8 +66,9 @@ EVENTS_PER_CALL = 200_000
 #: version is refused rather than misread (2: the pair contacts kept for cell crossings; 3: the
 #: "wedge" event count; 4: per-sphere fields at least FIELD_MIN long; 5: arrays named by field,
 #: hsgran._state, scratch space no longer stored; 6: the "cluster" event count, the cluster
-#: slack ``Space.slack`` and the cluster scalars; 7: the observables' ledger and sums).
-CHECKPOINT_VERSION = 7
+#: slack ``Space.slack`` and the cluster scalars; 7: the observables' ledger and sums; 8: the
+#: planes' prescribed motions ``planes_mot``).
+CHECKPOINT_VERSION = 8
 
 
 class SimulationError(HsgranError):
@@ -268,6 +269,9 @@ def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
         a["planes_p"][:] = [p.point for p in planes]
         a["planes_n"][:] = [p.normal for p in planes]
         a["planes_mat"][:] = [p.material for p in planes]
+        for k, p in enumerate(planes):
+            if p.motion is not None:
+                a["planes_mot"][k] = p.motion
     cell = a["cell"][:n]
     cell[:] = cell_coordinates(st[:, es.S_X:es.S_X + 3], a["origin"], a["csize"], a["ncell"],
                                a["periodic"])

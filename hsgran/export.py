@@ -6,7 +6,8 @@
   ``motion_state`` (hsgran.onplane.MS_*), ``material`` (index into the file's material names)
   and ``id`` (``motion_state`` is rebuilt from the event log for files that do not store it, as
   ``hsgran render`` does). ``walls.vtp`` holds the plane walls as finite quadrilaterals (the
-  patches ``hsgran render`` draws) with their ``normal`` and ``material``. ``NAME.pvd`` lists
+  patches ``hsgran render`` draws) with their ``normal`` and ``material`` (with moving planes,
+  ``walls_K.vtp`` for every frame K, the planes where they are then). ``NAME.pvd`` lists
   the frames with their times (part 0) and the walls (part 1) for every frame; its few lines of
   XML are written with the standard library's ElementTree. Open the ``.pvd`` in ParaView and
   show the points with the Point Gaussian representation scaled by ``radius``.
@@ -149,6 +150,7 @@ def _write_vtk(traj, states, frames, out: Path, force: bool, name: str) -> Expor
     walls_file = _write_walls(pv, traj, out)
     if walls_file is not None:
         files.append(walls_file)
+    moving = walls_file is not None and _any_moving(traj)
     collection = ET.Element("Collection")
     for k, f in enumerate(frames):
         cloud = pv.PolyData(np.ascontiguousarray(traj.position[f]))
@@ -161,6 +163,9 @@ def _write_vtk(traj, states, frames, out: Path, force: bool, name: str) -> Expor
         files.append(file)
         ET.SubElement(collection, "DataSet", timestep=repr(float(traj.time[f])), part="0",
                       file=file.name)
+        if moving:  # the walls where they are at this frame
+            walls_file = _write_walls(pv, traj, out, traj.time[f], f"walls_{k:06d}.vtp")
+            files.append(walls_file)
         if walls_file is not None:
             ET.SubElement(collection, "DataSet", timestep=repr(float(traj.time[f])),
                           part="1", file=walls_file.name)
@@ -171,7 +176,14 @@ def _write_vtk(traj, states, frames, out: Path, force: bool, name: str) -> Expor
     return ExportResult(pvd, files, len(frames))
 
 
-def _write_walls(pv, traj, out: Path) -> Path | None:
+def _any_moving(traj) -> bool:
+    from hsgran.render import wall_planes
+
+    return any(p.motion is not None for p in wall_planes(traj)[0])
+
+
+def _write_walls(pv, traj, out: Path, t: float = 0.0, name: str = "walls.vtp") -> Path | None:
+    """The plane walls as quadrilaterals, moving planes where they are at time t [s]."""
     from hsgran.render import wall_planes
 
     planes, _ = wall_planes(traj)
@@ -179,13 +191,14 @@ def _write_walls(pv, traj, out: Path) -> Path | None:
         return None
     lower, upper = scene_extent(traj)
     patches = wall_patches(planes, lower, upper, traj.box_lower, traj.box_upper)
-    points = np.concatenate([p.corners for p in patches])
+    points = np.concatenate([p.corners + (plane.point_at(t) - plane.point)
+                             for plane, p in zip(planes, patches, strict=True)])
     faces = np.concatenate([[4, 4 * k, 4 * k + 1, 4 * k + 2, 4 * k + 3]
                             for k in range(len(patches))])
     mesh = pv.PolyData(points, faces=faces)
     mesh.cell_data["normal"] = np.array([p.normal for p in patches])
     mesh.cell_data["material"] = np.array([p.material for p in patches], dtype=np.int32)
-    file = out / "walls.vtp"
+    file = out / name
     mesh.save(file)
     return file
 

@@ -58,6 +58,7 @@ from hsgran.animation import (
 from hsgran.errors import InputError, MissingDependency
 from hsgran.io.h5md import read_trajectory
 from hsgran.scene import Plane, parse_scene
+from hsgran.wallspec import M_KIND, MOT_FIXED
 
 # ---- environment -------------------------------------------------------------------------
 
@@ -317,7 +318,10 @@ def wall_planes(traj) -> tuple[list[Plane], str]:
     """
     walls = traj.walls
     if walls is not None:
-        planes = [Plane(walls.point[k], walls.normal[k], int(walls.material[k]), walls.key[k])
+        motion = walls.motion
+        planes = [Plane(walls.point[k], walls.normal[k], int(walls.material[k]), walls.key[k],
+                        None if motion is None or motion[k, M_KIND] == MOT_FIXED
+                        else motion[k])
                   for k in range(len(walls))]
         return planes, traj.scene_name
     try:
@@ -417,7 +421,9 @@ class Renderer:
         # and the low-contrast checker barely shimmers where squares shrink below a pixel.
         texture.mipmap = False
         light = np.asarray(WALL_LIGHT, dtype=float) / np.linalg.norm(WALL_LIGHT)
-        for patch in wall_patches(planes, lower, upper, traj.box_lower, traj.box_upper):
+        self._moving = []  # (actor, plane) of the moving planes, moved at every frame
+        patches = wall_patches(planes, lower, upper, traj.box_lower, traj.box_upper)
+        for plane, patch in zip(planes, patches, strict=True):
             quad = pv.PolyData(patch.corners, faces=[4, 0, 1, 2, 3])
             # one texture period holds two squares each way
             u, v = patch.edge_u / (2.0 * spacing), patch.edge_v / (2.0 * spacing)
@@ -431,6 +437,8 @@ class Renderer:
             actor = self.plotter.add_mesh(quad, texture=texture, lighting=False,
                                           color=(brightness,) * 3, show_scalar_bar=False)
             actor.prop.backface_culling = True     # near walls of a box would hide the inside
+            if plane.motion is not None:
+                self._moving.append((actor, plane))
         if traj.box_lower is not None and not all(traj.periodic):
             bounds = [c for a in range(3) for c in (traj.box_lower[a], traj.box_upper[a])]
             self.plotter.add_mesh(pv.Box(bounds).outline(), color=EDGE_COLOR,
@@ -594,6 +602,8 @@ class Renderer:
             The picture, (height, width, 3) uint8.
         """
         rgb = self.colors(frame.values)
+        for actor, plane in self._moving:
+            actor.position = tuple(plane.point_at(frame.time) - plane.point)
         if self.mesh_mode:
             self._update_meshes(frame, rgb)
         else:

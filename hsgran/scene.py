@@ -93,6 +93,18 @@ from hsgran.materials import (
 from hsgran.overrides import apply_overrides, names_override
 from hsgran.placement import CONTACT_TOLERANCE, Fill, Space, fill_spheres, overlapping_pairs
 from hsgran.system import available_memory
+from hsgran.wallspec import (
+    M_AMP,
+    M_DIR,
+    M_KIND,
+    M_OMEGA,
+    M_PHASE,
+    M_SIZE,
+    M_TRAVEL,
+    MOT_OSCILLATION,
+    MOT_VELOCITY,
+    wall_shift,
+)
 
 # ---- limits and tolerances ---------------------------------------------------------------
 
@@ -157,8 +169,12 @@ ROLLING_CONVENTIONS = {"A": "rolling torque also while sliding",
                        "B": "rolling torque only while rolling"}
 SCENE_KEYS = ("name", "duration", "gravity", "effects", "seed", "periodic")
 OUTPUT_KEYS = ("frame_interval", "observables")
-PLANE_KEYS = ("kind", "point", "normal", "material")
-BOX_KEYS = ("kind", "lower", "upper", "material")
+PLANE_KEYS = ("kind", "point", "normal", "material", "motion")
+BOX_KEYS = ("kind", "lower", "upper", "material", "motion")
+#: Prescribed motions of a plane (hsgran.wallmotion) and the keys of each.
+MOTION_KEYS = {"oscillation": ("kind", "amplitude", "frequency", "phase", "direction"),
+               "velocity": ("kind", "velocity", "start", "travel")}
+BOX_FACES = tuple(f"{side}_{axis}" for axis in "xyz" for side in ("lower", "upper"))
 WALL_KINDS = ("plane", "box")
 PARTICLE_KEYS = ("material", "radius", "position", "velocity", "angular_velocity")
 FILL_KEYS = ("count", "material", "radius", "region", "speed", "angular_velocity")
@@ -176,12 +192,21 @@ class Plane:
         normal: Unit normal [-], shape (3,), pointing into the region where spheres live.
         material: Index into :attr:`Scene.material_names`.
         key: Key path for messages (``walls[0]``, ``walls[1].lower_z``).
+        motion: Its prescribed motion, one row of ``hsgran.wallmotion`` ``M_*`` values, or
+            ``None`` for a fixed plane; ``point`` is where it is at t = 0.
     """
 
     point: np.ndarray
     normal: np.ndarray
     material: int
     key: str
+    motion: np.ndarray | None = None
+
+    def point_at(self, t: float) -> np.ndarray:
+        """A point of the plane at time t [s] [m], shape (3,)."""
+        if self.motion is None:
+            return self.point
+        return self.point + self.motion[M_DIR:M_DIR + 3] * wall_shift(self.motion[None], 0, t)
 
     def distance(self, position: np.ndarray) -> np.ndarray:
         """Signed distance [m] of points (..., 3) from the plane, positive on the normal's side."""
@@ -555,6 +580,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     names = _sphere_names(particles, fills)
     explicit = _explicit_spheres(particles, material_names)
     planes = _make_planes(walls, head.periodic, material_names)
+    _check_moving(planes, enduring.treatment)
     space = _space(planes, walls, head.periodic)
 
     # everything that does not need the fills' positions, before the (costly) placement
@@ -713,8 +739,10 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
                                  "live)", f"{key}.normal")
             material = _material_name(
                 library, _require(w, "material", key, "a material name"), f"{key}.material")
+            motion = (_parse_motion(w["motion"], f"{key}.motion", normal / length)
+                      if "motion" in w else None)
             entries.append(dict(kind=kind, key=key, point=point,
-                                normal=normal / length, material=material))
+                                normal=normal / length, material=material, motion=motion))
         else:
             _check_keys(w, BOX_KEYS, key)
             if box_key is not None:
@@ -738,12 +766,84 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
                                  "non-periodic axes)", f"{key}.material")
             box_lower, box_upper, box_key = lower, upper, key
             entries.append(dict(kind=kind, key=key, lower=lower, upper=upper,
-                                material=material))
+                                material=material, motion=_box_motions(w, key, periodic)))
     if any(periodic) and box_key is None:
         axes = ", ".join(AXES[i] for i in range(3) if periodic[i])
         raise InputError(f"periodic along {axes} needs a [[walls]] entry of kind = \"box\" "
                          "giving the period", "scene.periodic")
     return _Walls(entries, box_lower, box_upper, box_key)
+
+
+def _parse_motion(tab, key: str, normal: np.ndarray) -> np.ndarray:
+    """A plane's ``motion`` table → its row of hsgran.wallmotion ``M_*`` values."""
+    tab = _table(tab, key, "a table: { kind = \"oscillation\", ... } or "
+                           "{ kind = \"velocity\", ... }")
+    kind = _string(_require(tab, "kind", key, "'oscillation' or 'velocity'"), f"{key}.kind")
+    if kind not in MOTION_KEYS:
+        raise InputError(f"unknown motion '{kind}'{did_you_mean(kind, tuple(MOTION_KEYS))}; "
+                         f"known: {', '.join(MOTION_KEYS)}", f"{key}.kind")
+    _check_keys(tab, MOTION_KEYS[kind], key)
+    row = np.zeros(M_SIZE)
+    if kind == "oscillation":
+        direction = (_vector(tab["direction"], f"{key}.direction") if "direction" in tab
+                     else normal)
+        length = float(np.linalg.norm(direction))
+        if length == 0.0 or not math.isfinite(length):
+            raise InputError("must be a non-zero vector", f"{key}.direction")
+        row[M_KIND] = MOT_OSCILLATION
+        row[M_DIR:M_DIR + 3] = direction / length
+        row[M_AMP] = check_positive(_require(tab, "amplitude", key, "in m"),
+                                    f"{key}.amplitude", "m")
+        row[M_OMEGA] = 2.0 * math.pi * check_positive(
+            _require(tab, "frequency", key, "in Hz"), f"{key}.frequency", "Hz")
+        row[M_PHASE] = check_number(tab.get("phase", 0.0), f"{key}.phase")
+    else:
+        velocity = _vector(_require(tab, "velocity", key, "[x, y, z] in m/s"),
+                           f"{key}.velocity")
+        speed = float(np.linalg.norm(velocity))
+        if speed == 0.0 or not math.isfinite(speed):
+            raise InputError("must be a non-zero velocity in m/s", f"{key}.velocity")
+        row[M_KIND] = MOT_VELOCITY
+        row[M_DIR:M_DIR + 3] = velocity / speed
+        row[M_AMP] = speed
+        start = check_number(tab.get("start", 0.0), f"{key}.start")
+        if start < 0.0:
+            raise InputError(f"must be >= 0 s, got {start!r}", f"{key}.start")
+        row[M_PHASE] = start
+        row[M_TRAVEL] = check_positive(_require(tab, "travel", key,
+                                                "distance in m after which it stops"),
+                                       f"{key}.travel", "m")
+    row.setflags(write=False)
+    return row
+
+
+def _box_motions(w: dict, key: str, periodic: tuple) -> dict:
+    """The box's ``motion`` table: face name (``lower_z`` …) → motion row."""
+    if "motion" not in w:
+        return {}
+    tab = _table(w["motion"], f"{key}.motion",
+                 "a table of faces: { lower_z = { kind = \"oscillation\", ... } }")
+    motions = {}
+    for face, value in tab.items():
+        fkey = f"{key}.motion.{face}"
+        if face not in BOX_FACES:
+            raise InputError(f"unknown face '{face}'{did_you_mean(face, BOX_FACES)}; known: "
+                             f"{', '.join(BOX_FACES)}", fkey)
+        axis = AXES.index(face[-1])
+        if periodic[axis]:
+            raise InputError(f"the box has no {face} face: the {face[-1]} axis is periodic",
+                             fkey)
+        normal = np.zeros(3)
+        normal[axis] = 1.0 if face.startswith("lower") else -1.0
+        motions[face] = _parse_motion(value, fkey, normal)
+    return motions
+
+
+def _check_moving(planes: list[Plane], treatment: str) -> None:
+    moving = [p.key for p in planes if p.motion is not None]
+    if moving and treatment == "clusters":
+        raise InputError(f"moving walls ({moving[0]}) are not supported with the cluster "
+                         "treatment yet; use \"pairwise\"", "enduring_contact.treatment")
 
 
 def _check_periodic_planes(walls: _Walls, periodic: tuple) -> None:
@@ -769,7 +869,8 @@ def _make_planes(walls: _Walls, periodic: tuple, material_names: list[str]) -> l
     for w in walls.entries:
         if w["kind"] == "plane":
             planes.append(_frozen_plane(w["point"], w["normal"],
-                                        material_names.index(w["material"]), w["key"]))
+                                        material_names.index(w["material"]), w["key"],
+                                        w["motion"]))
             continue
         for i in range(3):
             if periodic[i]:
@@ -779,16 +880,18 @@ def _make_planes(walls: _Walls, periodic: tuple, material_names: list[str]) -> l
                 normal[i] = sign
                 planes.append(_frozen_plane(corner.copy(), normal,
                                             material_names.index(w["material"]),
-                                            f"{w['key']}.{side}_{AXES[i]}"))
+                                            f"{w['key']}.{side}_{AXES[i]}",
+                                            w["motion"].get(f"{side}_{AXES[i]}")))
     return planes
 
 
-def _frozen_plane(point: np.ndarray, normal: np.ndarray, material: int, key: str) -> Plane:
+def _frozen_plane(point: np.ndarray, normal: np.ndarray, material: int, key: str,
+                  motion: np.ndarray | None = None) -> Plane:
     point = np.array(point, dtype=float)
     normal = np.array(normal, dtype=float)
     point.setflags(write=False)
     normal.setflags(write=False)
-    return Plane(point, normal, material, key)
+    return Plane(point, normal, material, key, motion)
 
 
 def _space(planes: list[Plane], walls: _Walls, periodic: tuple) -> Space:

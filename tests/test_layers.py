@@ -27,6 +27,8 @@ LAYERS = {
     "_observe": 5,
     "contact.": 2,
     "motion": 2,
+    "wallmotion": 2,
+    "wallspec": 1,
     "onplane": 2,
     "events.": 3,
     "events.kinds": 3,

@@ -53,6 +53,7 @@ import numpy as np
 
 from hsgran.errors import InputError
 from hsgran.system import available_memory
+from hsgran.wallspec import M_DIR, M_KIND, M_SIZE, MOT_FIXED, wall_shift
 
 #: H5MD specification version the files conform to (``/h5md@version``).
 H5MD_VERSION = (1, 1)
@@ -208,12 +209,21 @@ class Walls:
         normal: Unit normal of each plane [-], shape (P, 3), pointing to where spheres live.
         material: Material index of each plane, shape (P,), into the material names.
         key: Key path of each plane in the scene (``walls[0]``, ``walls[1].lower_z``).
+        motion: Each plane's prescribed motion, shape (P, 8): the ``M_*`` columns of
+            :mod:`hsgran.wallmotion` (kind 0 for a fixed plane; ``point`` is the plane at t = 0).
     """
 
     point: np.ndarray
     normal: np.ndarray
     material: np.ndarray
     key: list[str]
+    motion: np.ndarray | None = None
+
+    def shift(self, k: int, t: float) -> np.ndarray:
+        """How far plane k has moved at time t [s] [m], shape (3,)."""
+        if self.motion is None or self.motion[k, M_KIND] == MOT_FIXED:
+            return np.zeros(3)
+        return self.motion[k, M_DIR:M_DIR + 3] * wall_shift(self.motion, k, float(t))
 
     @classmethod
     def of(cls, planes) -> Walls:
@@ -223,7 +233,9 @@ class Walls:
         return cls(point=np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3),
                    normal=np.array([p.normal for p in planes], dtype=np.float64).reshape(-1, 3),
                    material=np.array([p.material for p in planes], dtype=np.int32),
-                   key=[str(p.key) for p in planes])
+                   key=[str(p.key) for p in planes],
+                   motion=np.array([np.zeros(M_SIZE) if p.motion is None else p.motion
+                                    for p in planes], dtype=np.float64).reshape(-1, M_SIZE))
 
     def __len__(self) -> int:
         return int(self.point.shape[0])
@@ -570,6 +582,8 @@ class TrajectoryWriter:
             group.create_dataset("material", data=walls.material)
             group.create_dataset("key", data=np.array(walls.key, dtype=object).reshape(-1),
                                  dtype=_UTF8)
+            if walls.motion is not None and np.any(walls.motion[:, M_KIND] != MOT_FIXED):
+                group.create_dataset("motion", data=walls.motion)
         if pair_table is not None:
             parameters.create_dataset(PAIR_TABLE, data=pair_table)
 
@@ -1059,7 +1073,8 @@ def _read_walls(parameters: h5py.Group) -> Walls | None:
         return None
     group = parameters[WALLS]
     return Walls(point=group["point"][()], normal=group["normal"][()],
-                 material=group["material"][()], key=[_text(k) for k in group["key"][()]])
+                 material=group["material"][()], key=[_text(k) for k in group["key"][()]],
+                 motion=group["motion"][()] if "motion" in group else None)
 
 
 def _read_pair_table(parameters: h5py.Group) -> np.ndarray | None:
@@ -1158,7 +1173,9 @@ def _checked_walls(walls: Walls, n_materials: int) -> Walls:
                          "(one per material name)")
     if len(walls.key) != p:
         raise ValueError(f"walls.key: expected {p} key paths, got {len(walls.key)}")
-    return Walls(point, normal, material, [str(k) for k in walls.key])
+    motion = (None if walls.motion is None
+              else _checked(walls.motion, "walls.motion", (p, M_SIZE), np.float64))
+    return Walls(point, normal, material, [str(k) for k in walls.key], motion)
 
 
 def _seed_attribute(seed):

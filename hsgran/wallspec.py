@@ -1,0 +1,56 @@
+"""The prescribed motions of plane walls, as numbers (layer 1; no numba: files and drawings
+read them too). :mod:`hsgran.wallmotion` compiles these functions for the event loop and adds
+the contact time with a moving plane (docs/walls.md).
+
+A moving plane keeps its normal and translates along a unit direction d: p(t) = p₀ + d s(t),
+s(0) = 0. Each plane's motion is one row of ``M_*`` values (``Walls.planes_mot``); a fixed
+plane has kind ``MOT_FIXED``.
+"""
+
+from __future__ import annotations
+
+import math
+
+MOT_FIXED = 0  #: the plane does not move
+MOT_OSCILLATION = 1  #: s(t) = A [sin(ω t + φ) − sin φ]
+MOT_VELOCITY = 2  #: s(t) = V clamp(t − t₀, 0, L/V)
+
+M_KIND = 0  #: MOT_* code (stored as a float)
+M_DIR = 1  #: unit direction d of the motion, columns 1–3
+M_AMP = 4  #: amplitude A [m] (oscillation) or speed V [m/s] (velocity)
+M_OMEGA = 5  #: angular frequency ω [rad/s] (oscillation)
+M_PHASE = 6  #: phase φ [rad] (oscillation) or start time t₀ [s] (velocity)
+M_TRAVEL = 7  #: travel L [m] (velocity)
+M_SIZE = 8
+
+
+def wall_shift(mot, w, t):
+    """s(t) [m]: how far plane w has moved along its direction at time t [s]."""
+    kind = mot[w, M_KIND]
+    if kind == MOT_OSCILLATION:
+        return mot[w, M_AMP] * (math.sin(mot[w, M_OMEGA] * t + mot[w, M_PHASE])
+                                - math.sin(mot[w, M_PHASE]))
+    if kind == MOT_VELOCITY:
+        speed = mot[w, M_AMP]
+        return speed * min(max(t - mot[w, M_PHASE], 0.0), mot[w, M_TRAVEL] / speed)
+    return 0.0
+
+
+def wall_speed(mot, w, t):
+    """ṡ(t) [m/s] of plane w at time t [s] (a piston at its start or end: the speed after)."""
+    kind = mot[w, M_KIND]
+    if kind == MOT_OSCILLATION:
+        return mot[w, M_AMP] * mot[w, M_OMEGA] * math.cos(mot[w, M_OMEGA] * t + mot[w, M_PHASE])
+    if kind == MOT_VELOCITY:
+        speed = mot[w, M_AMP]
+        t0 = mot[w, M_PHASE]
+        return speed if t0 <= t < t0 + mot[w, M_TRAVEL] / speed else 0.0
+    return 0.0
+
+
+def wall_accel(mot, w, t):
+    """s̈(t) [m/s²] of plane w at time t [s] (0 for a piston between its kinks)."""
+    if mot[w, M_KIND] == MOT_OSCILLATION:
+        om = mot[w, M_OMEGA]
+        return -mot[w, M_AMP] * om * om * math.sin(om * t + mot[w, M_PHASE])
+    return 0.0
