@@ -329,3 +329,23 @@ def test_exported_walls_move_with_the_plate(tmp_path):
         walls = reader.read()[1]
         z = amp * (math.sin(omega * t + phase) - math.sin(phase))
         np.testing.assert_allclose(walls.points[:, 2], z, atol=1e-15, err_msg=f"frame {k}")
+
+
+def test_the_force_on_a_vibrating_plate_follows_the_ball_it_drives():
+    """On the period-1 orbit each bounce gives the plate the impulse m g T (the ball's momentum
+    is the same one period later), so the plate's force averaged over each period is the
+    ball's weight; within a period it is one impulse at the launch phase θ."""
+    e, gamma = 0.5, 1.3
+    text, (_, omega, phase, _) = ball_scene(e, gamma, 2.0, lift=0.0003)
+    period = 1.0 / FREQ
+    text = text.replace("frame_interval = 0.005",
+                        f"frame_interval = {period / 4!r}\nobservables = true")
+    sim, frames, log = run(text)
+    weight = float(sim.mass[0]) * G
+    impulse = frames["wall_impulse"][1:, 0, 2]  # on the plate, per quarter period [N s]
+    per_period = impulse[-40:].reshape(10, 4).sum(axis=1)
+    np.testing.assert_allclose(per_period, -weight * period, rtol=1e-9)
+    hits = log["time"][log["kind"] == EV_WALL]
+    quarter = np.floor(np.mod(omega * hits[-10:] + phase, 2 * math.pi) / (math.pi / 2))
+    theta = math.acos(window(e)[0] / gamma)
+    assert np.all(quarter == math.floor(theta / (math.pi / 2)))  # every hit in θ's quarter
