@@ -52,7 +52,14 @@ from hsgran._flight import (
     tc_row,
 )
 from hsgran._jit import njit, prefetch
-from hsgran._observe import book_pair, book_support, book_wall, close_interval, momentum, observing
+from hsgran._observe import (
+    before_pair,
+    before_wall,
+    book_pair,
+    book_wall,
+    close_interval,
+    observing,
+)
 from hsgran._predict import predict, predict_fn, prefetch_cells, repredict_later
 from hsgran._settling import (
     SETTLE_NONE,
@@ -326,15 +333,10 @@ def _pair_handler(grav_on):
         nx, ny, nz = dx / dist, dy / dist, dz / dist
         obs_on = observing(dyn)
         if obs_on:
-            if grav_on:
-                book_support(i, t, flight, dyn, walls, space)
-                book_support(j, t, flight, dyn, walls, space)
-            p_i = momentum(i, st, dyn.inv_m)
-            p_j = momentum(j, st, dyn.inv_m)
+            p_i, p_j, w_i = before_pair(i, j, t, flight, dyn, walls, space, grav_on)
         else:
             p_i = p_j = (0.0, 0.0, 0.0)
-        free_i = not grav_on or mstate[i] == MS_FLIGHT
-        free_j = not grav_on or mstate[j] == MS_FLIGHT
+            w_i = 0.5
         if grav_on and flags[FL_CLUSTERS] and cluster_collision(
                 i, j, -1, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
                 rec, flags) == CL_SOLVED:
@@ -393,7 +395,7 @@ def _pair_handler(grav_on):
                 return STATUS_COLLAPSE
             return GO_ON
         if obs_on:
-            book_pair(i, j, p_i, p_j, free_i, free_j, dx, dy, dz, flight, dyn, grav_on)
+            book_pair(i, j, p_i, p_j, w_i, dx, dy, dz, flight, dyn, grav_on)
         counter[i] += 1
         counter[j] += 1
         note_rapid(i, t, t_last, rapid, fsc[F_TC_TIME])
@@ -436,12 +438,7 @@ def _wall_handler(grav_on):
                 return GO_ON
             set_wall_velocity(walls, w, t)
         obs_on = observing(dyn)
-        if obs_on:
-            if grav_on:
-                book_support(i, t, flight, dyn, walls, space)
-            p_i = momentum(i, st, dyn.inv_m)
-        else:
-            p_i = (0.0, 0.0, 0.0)
+        p_i = before_wall(i, t, flight, dyn, walls, space, grav_on) if obs_on else (0.0, 0.0, 0.0)
         if grav_on and flags[FL_CLUSTERS] and cluster_collision(
                 i, -1, w, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
                 rec, flags) == CL_SOLVED:

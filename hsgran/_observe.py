@@ -32,6 +32,7 @@ from __future__ import annotations
 from hsgran._flight import min_image
 from hsgran._jit import njit
 from hsgran._state import OB_MOMENT, OB_N_PAIR, OB_N_WALL, OB_WALL, S_R, S_T, S_V
+from hsgran.onplane import MS_FLIGHT
 
 
 @njit(inline="always")
@@ -108,17 +109,40 @@ def momentum(j, st, inv_m):
 
 
 @njit
-def book_pair(i, j, pi, pj, free_i, free_j, bx, by, bz, flight, dyn, grav_on):
-    """A pair collision of spheres i and j at one instant: ``pi``, ``pj`` their momenta
-    [kg m/s] before it, ``free_i``, ``free_j`` whether each was in flight (nothing else acts on
-    it in the event), (bx, by, bz) = x_i − x_j [m]. The contact's impulse J on i is −Δp_j when
-    only j was free (i passed part of it on to its supports), Δp_i when only i was, and the
-    antisymmetric part (Δp_i − Δp_j)/2 otherwise. What else a sphere's momentum changed by is
-    support: it stays in the sphere's ledger for its next booking."""
+def before_pair(i, j, t, flight, dyn, walls, space, grav_on):
+    """Before a collision of spheres i and j at time t [s] (both advanced to t): book their
+    supports so far, and return their momenta [kg m/s] and the share w_i of i's momentum change
+    in the contact's impulse (for :func:`book_pair`). J on i is −Δp_j when only j is in flight
+    (i passes part of the blow on to its supports), Δp_i when only i is, and the antisymmetric
+    part (Δp_i − Δp_j)/2 otherwise: w_i = 0, 1, ½."""
+    if grav_on:
+        book_support(i, t, flight, dyn, walls, space)
+        book_support(j, t, flight, dyn, walls, space)
+        free_i = flight.mstate[i] == MS_FLIGHT
+        free_j = flight.mstate[j] == MS_FLIGHT
+        wi = 0.0 if free_j and not free_i else (1.0 if free_i and not free_j else 0.5)
+    else:
+        wi = 0.5
+    return momentum(i, flight.st, dyn.inv_m), momentum(j, flight.st, dyn.inv_m), wi
+
+
+@njit
+def before_wall(i, t, flight, dyn, walls, space, grav_on):
+    """Before a collision of sphere i with a plane at time t [s]: book its supports so far and
+    return its momentum [kg m/s] (for :func:`book_wall`)."""
+    if grav_on:
+        book_support(i, t, flight, dyn, walls, space)
+    return momentum(i, flight.st, dyn.inv_m)
+
+
+@njit
+def book_pair(i, j, pi, pj, wi, bx, by, bz, flight, dyn, grav_on):
+    """A pair collision of spheres i and j at one instant: ``pi``, ``pj``, ``wi`` from
+    :func:`before_pair`, (bx, by, bz) = x_i − x_j [m]. What else a sphere's momentum changed
+    by is support: it stays in the sphere's ledger for its next booking."""
     st, obs, led = flight.st, dyn.obs, dyn.led
     qi = momentum(i, st, dyn.inv_m)
     qj = momentum(j, st, dyn.inv_m)
-    wi = 0.0 if free_j and not free_i else (1.0 if free_i and not free_j else 0.5)
     jx = wi * (qi[0] - pi[0]) - (1.0 - wi) * (qj[0] - pj[0])
     jy = wi * (qi[1] - pi[1]) - (1.0 - wi) * (qj[1] - pj[1])
     jz = wi * (qi[2] - pi[2]) - (1.0 - wi) * (qj[2] - pj[2])
@@ -135,7 +159,7 @@ def book_pair(i, j, pi, pj, free_i, free_j, bx, by, bz, flight, dyn, grav_on):
 
 @njit
 def book_wall(i, w, pi, flight, dyn, walls, grav_on):
-    """A collision of sphere i with plane w: ``pi`` its momentum [kg m/s] before. Its whole
+    """A collision of sphere i with plane w: ``pi`` from :func:`before_wall`. Its whole
     momentum change is the plane's impulse (a landing after the rebound included)."""
     st, obs, led = flight.st, dyn.obs, dyn.led
     qi = momentum(i, st, dyn.inv_m)

@@ -44,7 +44,6 @@ MIN_STEP_PHASE = 1e-9
 # not import numba); compiled here for the loop
 wall_shift = njit(inline="always")(wallspec.wall_shift)
 wall_speed = njit(inline="always")(wallspec.wall_speed)
-wall_accel = njit(inline="always")(wallspec.wall_accel)
 
 
 @njit(inline="always")

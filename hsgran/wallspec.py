@@ -47,10 +47,3 @@ def wall_speed(mot, w, t):
         return speed if t0 <= t < t0 + mot[w, M_TRAVEL] / speed else 0.0
     return 0.0
 
-
-def wall_accel(mot, w, t):
-    """s̈(t) [m/s²] of plane w at time t [s] (0 for a piston between its kinks)."""
-    if mot[w, M_KIND] == MOT_OSCILLATION:
-        om = mot[w, M_OMEGA]
-        return -mot[w, M_AMP] * om * om * math.sin(om * t + mot[w, M_PHASE])
-    return 0.0

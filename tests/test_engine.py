@@ -9,6 +9,7 @@ import pytest
 from hsgran._predict import LAYER_MIN_CELLS
 from hsgran.engine import Simulation
 from hsgran.scene import load_scene, parse_scene
+from tests.observers import Keep
 
 #: Relative kinetic-energy drift allowed for an elastic gas: each collision conserves energy to
 #: a few ulps, and the errors of 1e5 collisions add up like a random walk (~1e-16 × √1e5 × N).
@@ -48,26 +49,6 @@ def gas(count=500, phi=0.2, duration=1.0, frame=0.1, seed=1):
     return parse_scene(
         GAS.format(count=count, side=side, duration=duration, frame=frame, seed=seed)
     )
-
-
-class Keep:
-    """Observer keeping every frame and event block."""
-
-    def __init__(self):
-        self.frames = []
-        self.events = []
-
-    def on_frames(self, b):
-        self.frames.append(b)
-
-    def on_events(self, b):
-        self.events.append(b)
-
-    def cat(self, name):
-        return np.concatenate([getattr(b, name) for b in self.frames])
-
-    def log(self, name):
-        return np.concatenate([getattr(b, name) for b in self.events])
 
 
 def min_pair_gap(pos, radius, box_len):

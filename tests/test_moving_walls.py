@@ -16,30 +16,22 @@ from hsgran.events.kinds import EV_WALL
 from hsgran.scene import parse_scene
 from hsgran.wallmotion import moving_plane_contact_time
 from hsgran.wallspec import M_KIND, MOT_FIXED
+from tests.observers import Keep
 
 G = 9.81  #: [m/s²]
 RADIUS = 1e-3  #: [m]
 
 
 def run(text, **kw):
-    """Run a scene; return the simulation, its frames (time, position, velocity) and log."""
+    """Run a scene; return the simulation, its frames (time, position, velocity and, with
+    observables, wall_impulse) and its event log (time, kind, i, j)."""
     sim = Simulation(parse_scene(text), log_events=True)
-    frames, events = [], []
-
-    class Keep:
-        def on_frames(self, block):
-            frames.append(block)
-
-        def on_events(self, block):
-            events.append(block)
-
-    sim.run(observers=[Keep()], **kw)
-    joined = {name: np.concatenate([getattr(b, name) for b in frames])
-              for name in ("time", "position", "velocity", "wall_impulse")
-              if getattr(frames[0], name) is not None}
-    log = {name: np.concatenate([getattr(b, name) for b in events])
-           for name in ("time", "kind", "i", "j")} if events else None
-    return sim, joined, log
+    keep = Keep()
+    sim.run(observers=[keep], **kw)
+    frames = {name: keep.cat(name) for name in ("time", "position", "velocity", "wall_impulse")
+              if getattr(keep.frames[0], name) is not None}
+    log = {name: keep.log(name) for name in ("time", "kind", "i", "j")} if keep.events else None
+    return sim, frames, log
 
 
 PISTON = """

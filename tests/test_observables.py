@@ -20,6 +20,7 @@ from hsgran.io.h5md import read_trajectory
 from hsgran.observables import interval_observables, mean_and_error
 from hsgran.onplane import MS_ASLEEP
 from hsgran.scene import parse_scene
+from tests.observers import Keep
 
 GAS = """
 [scene]
@@ -59,14 +60,9 @@ def gas(count, phi, periodic, seed=5, collisions_per_frame=1.0):
 
 def collect(sim, **run):
     """Run ``sim`` and return its frame blocks joined, field by field."""
-    blocks = []
-
-    class Keep:
-        def on_frames(self, block):
-            blocks.append(block)
-
-    sim.run(observers=[Keep()], **run)
-    return {name: np.concatenate([getattr(b, name) for b in blocks])
+    keep = Keep()
+    sim.run(observers=[keep], **run)
+    return {name: keep.cat(name)
             for name in ("time", "position", "velocity", "motion_state", "impulse_moment",
                          "wall_impulse", "unresolved_impulse", "collisions")}
 
