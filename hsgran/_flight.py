@@ -20,7 +20,16 @@ from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, approach_noise, flight_position
 from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
 from hsgran.wallmotion import wall_shift, wall_speed
-from hsgran.wallspec import M_DIR, M_KIND, MOT_FIXED
+from hsgran.wallspec import (
+    CY_AXIS,
+    CY_OMEGA,
+    CY_RADIUS,
+    CY_SIDE,
+    M_DIR,
+    WK_CYLINDER,
+    WK_MOVING,
+    WK_PLANE,
+)
 
 #: A sphere whose gap to a plane is within this fraction of its radius counts as touching it
 #: [-]: a gap of 1e-10 R is far above the rounding of a position dotted with a normal (~1e-16 of
@@ -201,8 +210,81 @@ def stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, 
 
 @njit(inline="always")
 def moving(walls, w):
-    """Whether plane w has a prescribed motion (hsgran.wallmotion)."""
-    return walls.planes_mot[w, M_KIND] != MOT_FIXED
+    """Whether wall w is a plane with a prescribed motion (hsgran.wallmotion)."""
+    return walls.planes_kind[w] == WK_MOVING
+
+
+@njit(inline="always")
+def holds(walls, w):
+    """Whether spheres may land, rest, roll and be wedge-stopped on wall w: a fixed plane (on
+    a moving plane or a cylinder every rebound flies, docs/walls.md)."""
+    return walls.planes_kind[w] == WK_PLANE
+
+
+@njit(inline="always")
+def curved(walls, w):
+    """Whether wall w is a cylinder."""
+    return walls.planes_kind[w] == WK_CYLINDER
+
+
+@njit(inline="always")
+def axis_offset(x, y, z, walls, w):
+    """A point's offset [m] from cylinder w's axis, perpendicular to it, (qx, qy, qz)."""
+    cyl, p = walls.planes_cyl, walls.planes_p
+    dx = x - p[w, 0]
+    dy = y - p[w, 1]
+    dz = z - p[w, 2]
+    ax, ay, az = cyl[w, CY_AXIS], cyl[w, CY_AXIS + 1], cyl[w, CY_AXIS + 2]
+    s = dx * ax + dy * ay + dz * az
+    return dx - s * ax, dy - s * ay, dz - s * az
+
+
+@njit(inline="always")
+def across_axis(vx, vy, vz, walls, w):
+    """The part (vx, vy, vz) of a vector perpendicular to cylinder w's axis."""
+    cyl = walls.planes_cyl
+    ax, ay, az = cyl[w, CY_AXIS], cyl[w, CY_AXIS + 1], cyl[w, CY_AXIS + 2]
+    s = vx * ax + vy * ay + vz * az
+    return vx - s * ax, vy - s * ay, vz - s * az
+
+
+@njit(inline="always")
+def cylinder_gap(x, y, z, r, walls, w):
+    """Gap [m] between a sphere of radius r [m] at (x, y, z) [m] and cylinder w (negative:
+    overlap), and the distance of the centre from the axis [m]."""
+    qx, qy, qz = axis_offset(x, y, z, walls, w)
+    d = np.sqrt(qx * qx + qy * qy + qz * qz)
+    side = walls.planes_cyl[w, CY_SIDE]
+    return side * (walls.planes_cyl[w, CY_RADIUS] - d) - r, d
+
+
+@njit(inline="always")
+def set_cylinder_contact(walls, w, x, y, z, r):
+    """Store cylinder w's contact with the sphere of radius r [m] at (x, y, z) [m] in its row:
+    the normal towards the sphere in ``planes_n[w]``, the surface velocity Ω a × (c − p) at the
+    contact point c in ``planes_vel[w]`` [m/s], and Ω a in ``planes_omg[w]`` [rad/s] (what the
+    collision model reads of a wall). Returns False for a centre on the axis (no normal)."""
+    cyl = walls.planes_cyl
+    qx, qy, qz = axis_offset(x, y, z, walls, w)
+    d = np.sqrt(qx * qx + qy * qy + qz * qz)
+    if d == 0.0:
+        return False
+    side = cyl[w, CY_SIDE]  # inside, the normal points to the axis
+    nx, ny, nz = -side * qx / d, -side * qy / d, -side * qz / d
+    walls.planes_n[w, 0] = nx
+    walls.planes_n[w, 1] = ny
+    walls.planes_n[w, 2] = nz
+    om = cyl[w, CY_OMEGA]
+    ax, ay, az = cyl[w, CY_AXIS], cyl[w, CY_AXIS + 1], cyl[w, CY_AXIS + 2]
+    # the contact point's offset from the axis is R q/|q|
+    k = om * cyl[w, CY_RADIUS] / d
+    walls.planes_vel[w, 0] = k * (ay * qz - az * qy)
+    walls.planes_vel[w, 1] = k * (az * qx - ax * qz)
+    walls.planes_vel[w, 2] = k * (ax * qy - ay * qx)
+    walls.planes_omg[w, 0] = om * ax
+    walls.planes_omg[w, 1] = om * ay
+    walls.planes_omg[w, 2] = om * az
+    return True
 
 
 @njit(inline="always")

@@ -40,13 +40,16 @@ from hsgran._flight import (
     START_GAP_REL,
     advance,
     approaching,
+    curved,
     enter_plane,
+    holds,
     min_image,
     moving,
     moving_gap,
     note_progress,
     plane_gap,
     pressed,
+    set_cylinder_contact,
     set_wall_velocity,
     state_at,
     tc_row,
@@ -193,8 +196,8 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
         # landing speed, pressed on by gravity) start in an on-plane state
         for i in range(st.shape[0]):
             for w in range(planes_p.shape[0]):
-                if moving(walls, w):
-                    continue  # no sphere rests on a moving plane
+                if not holds(walls, w):
+                    continue  # no sphere rests on a moving plane or a cylinder
                 gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)
                 gn, vn = pressed(i, w, st, walls, space.gravity)
                 if (abs(gap) <= START_GAP_REL * st[i, S_R] and gn > 0.0
@@ -437,6 +440,8 @@ def _wall_handler(grav_on):
                     return STATUS_COLLAPSE
                 return GO_ON
             set_wall_velocity(walls, w, t)
+        elif curved(walls, w):
+            set_cylinder_contact(walls, w, st[i, 0], st[i, 1], st[i, 2], st[i, S_R])
         obs_on = observing(dyn)
         p_i = before_wall(i, t, flight, dyn, walls, space, grav_on) if obs_on else (0.0, 0.0, 0.0)
         if grav_on and flags[FL_CLUSTERS] and cluster_collision(

@@ -9,13 +9,23 @@ pair event whose partner has moved on since is known to be stale (lazy invalidat
 
 from __future__ import annotations
 
-from hsgran._flight import PLANE_TOUCHING_REL, TOUCH_REL, moving, moving_gap, plane_gap, state_at
+from hsgran._flight import (
+    PLANE_TOUCHING_REL,
+    TOUCH_REL,
+    across_axis,
+    axis_offset,
+    moving,
+    moving_gap,
+    plane_gap,
+    state_at,
+)
 from hsgran._jit import njit, prefetch
 from hsgran._state import I_PEND_A, I_PEND_B, I_SEQ, S_R
 from hsgran.events.calendar import calendar_update, has_buckets
 from hsgran.events.kinds import EV_CELL, EV_NONE, EV_PAIR, EV_STATE, EV_WALL
 from hsgran.motion import (
     NEVER,
+    cylinder_contact_time,
     face_exit_time,
     pair_contact_accelerated,
     pair_contact_before,
@@ -23,6 +33,7 @@ from hsgran.motion import (
 )
 from hsgran.onplane import MS_FLIGHT, MS_SUPPORTED
 from hsgran.wallmotion import moving_plane_contact_time
+from hsgran.wallspec import CY_RADIUS, CY_SIDE, WK_PLANE
 
 #: Cells a crossed axis needs for the crossing to look only at the new layer of neighbouring
 #: cells (see predict): with 1 or 2 the lists of that axis are not neighbour layers.
@@ -142,6 +153,26 @@ def cell_heads(s, grid, space):
     return m
 
 
+@njit
+def other_wall_time(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, t_now, horizon):
+    """Delay [s] until a sphere of radius r [m] at (x, y, z) [m] with velocity (u, v, w_) [m/s]
+    and acceleration (gx, gy, gz) [m/s²] at t_now [s] meets wall w, a moving plane or a
+    cylinder; ``inf`` if not within ``horizon`` [s]."""
+    if moving(walls, w):
+        n = walls.planes_n
+        gap, cn = moving_gap(x, y, z, r, walls, w, t_now)
+        return moving_plane_contact_time(
+            gap, u * n[w, 0] + v * n[w, 1] + w_ * n[w, 2], gx * n[w, 0] + gy * n[w, 1]
+            + gz * n[w, 2], walls.planes_mot, w, cn, t_now, r, horizon)
+    side = walls.planes_cyl[w, CY_SIDE]
+    qx, qy, qz = axis_offset(x, y, z, walls, w)
+    ux, uy, uz = across_axis(u, v, w_, walls, w)
+    ax, ay, az = across_axis(gx, gy, gz, walls, w)
+    return cylinder_contact_time(qx, qy, qz, ux, uy, uz, ax, ay, az,
+                                 walls.planes_cyl[w, CY_RADIUS] - side * r, side, horizon,
+                                 abs(u) + abs(v) + abs(w_), abs(x) + abs(y) + abs(z))
+
+
 # long: the hot path of every scene, inlined into the loop at one call site; its steps (cell
 # exit, planes, the neighbours' lists) share the sphere's state at t_now and the best event so
 # far, which split functions would pass back and forth as tuples
@@ -199,11 +230,9 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
         nx = planes_n[w, 0]
         ny = planes_n[w, 1]
         nz = planes_n[w, 2]
-        if moving(walls, w):
-            gap, cn = moving_gap(xi, yi, zi, ri, walls, w, t_now)
-            tau = moving_plane_contact_time(
-                gap, ui * nx + vi * ny + wi * nz, gi[0] * nx + gi[1] * ny + gi[2] * nz,
-                walls.planes_mot, w, cn, t_now, ri, best)
+        if walls.planes_kind[w] != WK_PLANE:
+            tau = other_wall_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], ri, walls, w,
+                                  t_now, best)
             if tau < best:
                 best = tau
                 kind = EV_WALL

@@ -31,9 +31,9 @@ from hsgran._flight import (
     approaching,
     enter_plane,
     halt,
+    holds,
     leave_plane,
     min_image,
-    moving,
     plane_gap,
     pressed,
     stop_on_plane,
@@ -413,8 +413,8 @@ def _resting_plane(i, st, walls, gravity, v_land):
     ever came back to the plane."""
     planes_p, planes_n = walls.planes_p, walls.planes_n
     for w in range(planes_p.shape[0]):
-        if moving(walls, w):
-            continue  # no sphere rests on a moving plane
+        if not holds(walls, w):
+            continue  # no sphere rests on a moving plane or a cylinder
         gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)
         if gap <= PLANE_TOUCHING_REL * st[i, S_R]:
             gn, vn = pressed(i, w, st, walls, gravity)
@@ -642,8 +642,8 @@ def lands_before_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, fla
     instead (MODEL §5.3; what is given up is the rebound, at most ½ m v_land², see
     hsgran.scene). It is then put on the plane."""
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
-    if moving(walls, w):
-        return False  # no sphere rests on a moving plane
+    if not holds(walls, w):
+        return False  # no sphere rests on a moving plane or a cylinder
     gn, vn = pressed(i, w, flight.st, walls, gravity)
     if not (gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]):
         return False
@@ -688,7 +688,9 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     inv_mi = inv_m[i] * (1.0 - ci * ci) if ci >= 0.0 else inv_m[i]
     row, tc_on = tc_row(pair_table[dyn.mat[i], planes_mat[w]], t, dyn.t_last[i], -NEVER, fsc,
                         dyn.row_tc)
-    driven = moving(walls, w)  # its velocity at t is in planes_vel[w] (the wall handler)
+    # a moving plane or a cylinder: its velocity and normal at t are in planes_vel[w],
+    # planes_n[w] (the wall handler), and it holds no sphere
+    driven = not holds(walls, w)
     hit = resolve(st[i, S_V:S_V + 3], wi, walls.planes_vel[w], walls.planes_omg[w],
                   planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0, dyn.inv_i[i],
                   0.0, ri, 0.0, 1.0 / ri, row, rec, plasticity, friction, rolling, adhesion,

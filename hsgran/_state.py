@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hsgran.wallspec import CY_SIZE, M_SIZE
+
 #: What a prediction needs of every sphere. ``st``: one 64-byte row per sphere (``S_*`` columns
 #: of hsgran._loop: position [m], velocity [m/s], local time [s], radius [m]); ``counter``:
 #: event counters; with gravity ``acc`` [m/s²], motion state ``mstate`` (hsgran.onplane MS_*),
@@ -38,10 +40,14 @@ Flight = namedtuple("Flight", "st counter acc mstate mplane seg_end seg_code pc_
 #: within the TC time (jams). With observables on (hsgran._observe): ``led`` each sphere's
 #: momentum ledger [kg m/s] and ``obs`` the sums of the current frame interval (``OB_*``).
 Dyn = namedtuple("Dyn", "omg inv_m inv_i mat zstreak alpha seg_dir t_last row_tc rapid led obs")
-#: The planes: a point at t = 0 [m], unit normal, material, velocity [m/s] and angular
-#: velocity [rad/s] (of a moving plane: its velocity at its last collision), and the prescribed
-#: motion (hsgran.wallmotion ``M_*`` columns; kind MOT_FIXED for a fixed plane).
-Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg planes_mot")
+#: The walls, one row each, planes first, then cylinders (``planes_kind``: hsgran.wallspec
+#: ``WK_*``): a point at t = 0 [m] (a cylinder's centre), unit normal, material, velocity [m/s]
+#: and angular velocity [rad/s] (of a moving plane: its velocity at its last collision; of a
+#: cylinder: the normal and surface velocity at its last contact), the prescribed motion
+#: (hsgran.wallspec ``M_*`` columns; kind MOT_FIXED for a fixed plane) and a cylinder's
+#: geometry (``CY_*`` columns).
+Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg planes_mot "
+                            "planes_kind planes_cyl")
 #: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic; ``slack``: a
 #: touching contact of a sphere in constrained motion (MS_SUPPORTED, hsgran._cluster) whose
 #: normal velocity stays above −slack[0] [m/s] until its segment ends is no contact event (the
@@ -290,7 +296,9 @@ FIELDS = (
     _f("Walls", "planes_mat", "i8", ("planes",)),
     _f("Walls", "planes_vel", "f8", ("planes", 3)),
     _f("Walls", "planes_omg", "f8", ("planes", 3)),
-    _f("Walls", "planes_mot", "f8", ("planes", 8)),
+    _f("Walls", "planes_mot", "f8", ("planes", M_SIZE)),
+    _f("Walls", "planes_kind", "i8", ("planes",)),
+    _f("Walls", "planes_cyl", "f8", ("planes", CY_SIZE)),
     _f("Space", "gravity", "f8", (3,)),
     _f("Space", "box_len", "f8", (3,)),
     _f("Space", "periodic", "?", (3,)),

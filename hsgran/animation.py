@@ -35,6 +35,7 @@ from hsgran.onplane import (
     MS_SUPPORTED,
 )
 from hsgran.scene import Plane
+from hsgran.wallspec import cylinder_bounds
 
 # ---- time sampling -----------------------------------------------------------------------
 
@@ -465,6 +466,12 @@ def scene_extent(traj) -> tuple[np.ndarray, np.ndarray]:
     if traj.box_lower is not None:
         lower = np.minimum(lower, traj.box_lower)
         upper = np.maximum(upper, traj.box_upper)
+    walls = getattr(traj, "walls", None)  # (stand-ins in tests may have none)
+    for k in range(0 if walls is None else len(walls)):
+        if walls.is_cylinder(k):
+            lo, hi = cylinder_bounds(walls.point[k], walls.cylinder[k])
+            lower = np.minimum(lower, lo)
+            upper = np.maximum(upper, hi)
     return lower, upper
 
 

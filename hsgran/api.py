@@ -81,7 +81,7 @@ def open_writer(path, scene: Scene, sim: Simulation, *, log_events: bool,
         log_events=log_events, creator_args=creator_args, motion_state=True,
         observables=scene.observables,
         checkpoint_layout=sim.checkpoint_layout(), overrides=scene.overrides,
-        walls=Walls.of(scene.planes), scene_name=scene.name, pair_table=sim.pair_table)
+        walls=Walls.of(scene.walls), scene_name=scene.name, pair_table=sim.pair_table)
 
 
 def _run_into(sim: Simulation, writer: TrajectoryWriter, t_end: float, *, progress: bool,

@@ -49,6 +49,7 @@ from hsgran.events.calendar import calendar_build, new_calendar
 from hsgran.events.grid import cell_coordinates, insert_all, plan_grid
 from hsgran.materials import P_E_FIXED, P_VISC, SOLID_SPHERE_INERTIA
 from hsgran.onplane import CONVENTION_A, CONVENTION_B
+from hsgran.wallspec import WK_CYLINDER, WK_MOVING, cylinder_bounds
 
 #: Bytes of frame buffer the engine may hold; frames are handed to observers when it is full.
 FRAME_BUFFER_BYTES = 32 * 2**20
@@ -67,8 +68,9 @@ EVENTS_PER_CALL = 200_000
 #: "wedge" event count; 4: per-sphere fields at least FIELD_MIN long; 5: arrays named by field,
 #: hsgran._state, scratch space no longer stored; 6: the "cluster" event count, the cluster
 #: slack ``Space.slack`` and the cluster scalars; 7: the observables' ledger and sums; 8: the
-#: planes' prescribed motions ``planes_mot``).
-CHECKPOINT_VERSION = 8
+#: planes' prescribed motions ``planes_mot``; 9: the walls' kinds and the cylinders,
+#: ``planes_kind`` and ``planes_cyl``).
+CHECKPOINT_VERSION = 9
 
 
 class SimulationError(HsgranError):
@@ -235,6 +237,11 @@ def _grid_plan(scene, brute_force: bool):
         pos = np.asarray(scene.position, dtype=np.float64)
         lower = (pos - radius[:, None]).min(axis=0)
         upper = (pos + radius[:, None]).max(axis=0)
+        for c in scene.cylinders:  # the spheres inside a cylinder may go anywhere in it
+            if c.inside:
+                lo, hi = cylinder_bounds(c.center, c.row())
+                lower = np.minimum(lower, lo)
+                upper = np.maximum(upper, hi)
     box_len = np.where(periodic, upper - lower, 0.0)
     origin, csize, ncell = plan_grid(lower, upper, periodic, 2.0 * float(radius.max()), scene.n)
     if brute_force:
@@ -264,14 +271,18 @@ def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
     a["gravity"][:] = scene.gravity
     a["acc"][:] = a["gravity"]
     a["periodic"][:] = scene.periodic
-    planes = list(scene.planes)
-    if planes:
-        a["planes_p"][:] = [p.point for p in planes]
-        a["planes_n"][:] = [p.normal for p in planes]
-        a["planes_mat"][:] = [p.material for p in planes]
-        for k, p in enumerate(planes):
-            if p.motion is not None:
-                a["planes_mot"][k] = p.motion
+    for k, p in enumerate(scene.planes):  # the wall rows: planes, then cylinders
+        a["planes_p"][k] = p.point
+        a["planes_n"][k] = p.normal
+        a["planes_mat"][k] = p.material
+        if p.motion is not None:
+            a["planes_mot"][k] = p.motion
+            a["planes_kind"][k] = WK_MOVING
+    for k, c in enumerate(scene.cylinders, start=len(scene.planes)):
+        a["planes_p"][k] = c.center
+        a["planes_mat"][k] = c.material
+        a["planes_kind"][k] = WK_CYLINDER
+        a["planes_cyl"][k] = c.row()
     cell = a["cell"][:n]
     cell[:] = cell_coordinates(st[:, es.S_X:es.S_X + 3], a["origin"], a["csize"], a["ncell"],
                                a["periodic"])
@@ -314,7 +325,7 @@ class Simulation:
         origin, csize, ncell, box_len = _grid_plan(scene, brute_force)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
         sizes = Sizes(n=n, gravity=bool(eff.gravity), rotation=self.rotation,
-                      planes=len(scene.planes), cells=int(np.prod(ncell)),
+                      planes=len(scene.walls), cells=int(np.prod(ncell)),
                       row=self.pair_table.shape[-1],
                       frames=frame_buffer or max(1, min(FRAME_BUFFER_MAX,
                                                         FRAME_BUFFER_BYTES // per_frame)),
@@ -462,7 +473,7 @@ class Simulation:
                            dissipated, self.fr_ms[:f].copy())
         if self.scene.observables:
             sums = self.fr_obs[:f]
-            planes = len(self.scene.planes)
+            planes = len(self.scene.walls)
             block.impulse_moment = sums[:, es.OB_MOMENT:es.OB_MOMENT + 9].reshape(f, 3, 3).copy()
             block.wall_impulse = sums[:, es.OB_WALL:es.OB_WALL + 3 * planes].reshape(
                 f, planes, 3).copy()

@@ -183,21 +183,36 @@ def _any_moving(traj) -> bool:
 
 
 def _write_walls(pv, traj, out: Path, t: float = 0.0, name: str = "walls.vtp") -> Path | None:
-    """The plane walls as quadrilaterals, moving planes where they are at time t [s]."""
-    from hsgran.render import wall_planes
+    """The plane walls as quadrilaterals, moving planes where they are at time t [s], and
+    the cylinders as tubes of quadrilaterals (normals towards the spheres)."""
+    from hsgran.render import CYLINDER_SEGMENTS, wall_cylinders, wall_planes
 
     planes, _ = wall_planes(traj)
-    if not planes:
+    meshes = []
+    if planes:
+        lower, upper = scene_extent(traj)
+        patches = wall_patches(planes, lower, upper, traj.box_lower, traj.box_upper)
+        points = np.concatenate([p.corners + (plane.point_at(t) - plane.point)
+                                 for plane, p in zip(planes, patches, strict=True)])
+        faces = np.concatenate([[4, 4 * k, 4 * k + 1, 4 * k + 2, 4 * k + 3]
+                                for k in range(len(patches))])
+        mesh = pv.PolyData(points, faces=faces)
+        mesh.cell_data["normal"] = np.array([p.normal for p in patches])
+        mesh.cell_data["material"] = np.array([p.material for p in patches], dtype=np.int32)
+        meshes.append(mesh)
+    for cyl in wall_cylinders(traj):
+        tube = pv.Cylinder(center=cyl.center, direction=cyl.axis, radius=cyl.radius,
+                           height=2.0 * cyl.half_length, resolution=CYLINDER_SEGMENTS,
+                           capping=False)
+        q = np.asarray(tube.cell_centers().points) - cyl.center
+        q -= np.outer(q @ cyl.axis, cyl.axis)
+        q /= np.linalg.norm(q, axis=1)[:, None]
+        tube.cell_data["normal"] = -q if cyl.inside else q
+        tube.cell_data["material"] = np.full(tube.n_cells, cyl.material, dtype=np.int32)
+        meshes.append(tube)
+    if not meshes:
         return None
-    lower, upper = scene_extent(traj)
-    patches = wall_patches(planes, lower, upper, traj.box_lower, traj.box_upper)
-    points = np.concatenate([p.corners + (plane.point_at(t) - plane.point)
-                             for plane, p in zip(planes, patches, strict=True)])
-    faces = np.concatenate([[4, 4 * k, 4 * k + 1, 4 * k + 2, 4 * k + 3]
-                            for k in range(len(patches))])
-    mesh = pv.PolyData(points, faces=faces)
-    mesh.cell_data["normal"] = np.array([p.normal for p in patches])
-    mesh.cell_data["material"] = np.array([p.material for p in patches], dtype=np.int32)
+    mesh = meshes[0] if len(meshes) == 1 else pv.merge(meshes)
     file = out / name
     mesh.save(file)
     return file

@@ -189,16 +189,17 @@ OUT_OF_REACH_MARGIN = 1e-9
 
 
 @njit(inline="always")
-def _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, t):
-    """f(t) = |r + w t + ½ a t²|² − σ² and f'(t), evaluated from the displacement (accurate
-    near contact, unlike the expanded quartic)."""
+def _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, t):
+    """f(t) = sgn (|r + w t + ½ a t²|² − σ²) and f'(t), evaluated from the displacement
+    (accurate near contact, unlike the expanded quartic); sgn = 1 for spheres apart, −1 for a
+    distance that must stay below σ (a sphere inside a cylinder)."""
     dx = rx + t * (wx + 0.5 * ax * t)
     dy = ry + t * (wy + 0.5 * ay * t)
     dz = rz + t * (wz + 0.5 * az * t)
     ux = wx + ax * t
     uy = wy + ay * t
     uz = wz + az * t
-    return dx * dx + dy * dy + dz * dz - s2, 2.0 * (dx * ux + dy * uy + dz * uz)
+    return sgn * (dx * dx + dy * dy + dz * dz - s2), sgn * 2.0 * (dx * ux + dy * uy + dz * uz)
 
 
 @njit(inline="always")
@@ -208,13 +209,13 @@ def _dpoly(c4, c3, c2, c1, t):
 
 
 @njit
-def _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, lo, hi):
+def _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, lo, hi):
     """Root of f in [lo, hi] where f(lo) > 0 ≥ f(hi) and f is monotone: safeguarded Newton."""
     for _ in range(ROOT_MAX_ITER):
         mid = 0.5 * (lo + hi)
         if not (lo < mid < hi):
             break
-        f, df = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, mid)
+        f, df = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, mid)
         if f > 0.0:
             lo = mid
         else:
@@ -223,7 +224,7 @@ def _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, lo, hi):
         if df < 0.0:
             t = mid - f / df
             if lo < t < hi:
-                ft, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, t)
+                ft, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, t)
                 if ft > 0.0:
                     lo = t
                 else:
@@ -232,13 +233,13 @@ def _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, lo, hi):
 
 
 @njit(inline="always")
-def _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, b):
+def _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, b):
     """(True, root) if f falls through zero on [a, b], a piece where it is monotone; else
     (False, inf)."""
-    fa, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a)
-    fb, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, b)
+    fa, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a)
+    fb, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, b)
     if fa > 0.0 and fb <= 0.0:
-        return True, _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, b)
+        return True, _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, b)
     return False, NEVER
 
 
@@ -316,6 +317,16 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
         noise = 2.0 * approach_noise(sigma, v_sum, x_sum)
         if c1 < -noise or (c2 < 0.0 and c1 <= noise):
             return 0.0
+    return _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, 1.0, c4, c3, c2, c1, h, touching)
+
+
+# long: one walk over the pieces of a quartic, bracketing at each step; split, the pieces'
+# bounds would travel between functions as tuples
+@njit
+def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, c4, c3, c2, c1, h, touching):
+    """First τ in [0, h] where f = sgn (|r + wτ + ½aτ²|² − σ²) (coefficients c4 … c1 of τ⁴ …
+    τ, sign included) falls through zero; ``inf`` if none. ``touching``: f(0) is round-off, so
+    the piece from τ = 0 is not searched."""
     # critical points of f' (zeros of f'' = 12 c4 τ² + 6 c3 τ + 2 c2) split [0, h] into up to
     # three pieces on which f' is monotone; the zeros of f' found there split it into pieces
     # where f is, which are searched in order as they are found (scalars, not arrays: this runs
@@ -323,13 +334,13 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
     qa = 12.0 * c4
     qb = 6.0 * c3
     qc = 2.0 * c2
-    p1 = p2 = h  # inner bounds of the pieces of f' (q1 < q2 as qa > 0), h where absent
+    p1 = p2 = h  # inner bounds of the pieces of f', in order, h where absent
     m = 1  # pieces of f'
     disc = qb * qb - 4.0 * qa * qc
     if disc > 0.0:
         sq = math.sqrt(disc)
-        q1 = (-qb - sq) / (2.0 * qa)
-        q2 = (-qb + sq) / (2.0 * qa)
+        q1 = min((-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa))
+        q2 = max((-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa))
         if 0.0 < q1 < h:
             p1 = q1
             m += 1
@@ -350,13 +361,72 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
         if (flo > 0.0) != (fhi > 0.0) and flo != 0.0 and fhi != 0.0:
             b = _dpoly_root(c4, c3, c2, c1, lo, hi)
             if b > a and not (touching and first):
-                found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, b)
+                found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, b)
                 if found:
                     return tau
             a = b
             first = False
     if h > a and not (touching and first):
-        found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, a, h)
+        found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, h)
         if found:
             return tau
     return NEVER
+
+
+@njit
+def cylinder_contact_time(qx, qy, qz, ux, uy, uz, gx, gy, gz, rho, side, horizon, v_sum=0.0,
+                          x_sum=0.0):
+    """Time until a sphere in flight touches a cylinder (docs/walls.md, "Cylinders").
+
+    Only the parts perpendicular to the axis matter: the centre's offset q from the axis moves
+    as q + uτ + ½gτ², and the sphere touches when |q| = ρ, with ρ = R − r inside the cylinder
+    and R + r outside. f(τ) = ∓(|q(τ)|² − ρ²) is a quartic, searched as for two spheres with
+    different accelerations (:func:`pair_contact_accelerated`).
+
+    Args:
+        qx, qy, qz: The centre's offset from the axis, perpendicular to it [m].
+        ux, uy, uz: Its velocity, perpendicular to the axis [m/s].
+        gx, gy, gz: Its acceleration, perpendicular to the axis [m/s²].
+        rho: The distance from the axis at contact [m].
+        side: +1 for a sphere inside the cylinder, −1 outside.
+        horizon: Only contacts up to this delay [s] are wanted (finite or ``inf``).
+        v_sum, x_sum: Speed and position scales of the rounding (:func:`approach_noise`).
+
+    Returns:
+        Delay τ ≥ 0 [s] of the contact, or ``inf`` if none before the horizon.
+    """
+    sgn = -side  # f > 0 while the sphere is clear of the surface
+    s2 = rho * rho
+    c4 = sgn * 0.25 * (gx * gx + gy * gy + gz * gz)
+    c3 = sgn * (ux * gx + uy * gy + uz * gz)
+    c2 = sgn * (ux * ux + uy * uy + uz * uz + qx * gx + qy * gy + qz * gz)
+    c1 = sgn * 2.0 * (qx * ux + qy * uy + qz * uz)
+    c0 = sgn * (qx * qx + qy * qy + qz * qz - s2)
+    touching = c0 <= TOUCHING_REL * s2
+    if touching:
+        # as for two spheres (pair_contact_accelerated): a contact now if approaching beyond
+        # rounding, or pressed against the surface (f'' < 0: gravity or the curvature of the
+        # path pushes the centre through it) with no separation to speak of
+        noise = 2.0 * approach_noise(rho, v_sum, x_sum)
+        if c1 < -noise or (c2 < 0.0 and c1 <= noise):
+            return 0.0
+    if c4 == 0.0:
+        # no acceleration across the axis: |q + uτ| = ρ, a quadratic a τ² + 2 b τ + c = 0
+        a = ux * ux + uy * uy + uz * uz
+        if a == 0.0:
+            return NEVER
+        b = qx * ux + qy * uy + qz * uz
+        c = qx * qx + qy * qy + qz * qz - s2
+        if side < 0.0:
+            return pair_contact_before(qx, qy, qz, ux, uy, uz, rho, horizon, v_sum, x_sum)
+        c = min(c, 0.0)
+        s = math.sqrt(b * b - a * c)
+        tau = -c / (b + s) if b >= 0.0 else (s - b) / a
+        if touching and tau <= 0.0:
+            return NEVER
+        return tau if tau <= horizon else NEVER
+    ac4 = abs(c4)
+    bound = 2.0 * max(abs(c3) / ac4, math.sqrt(abs(c2) / ac4), (abs(c1) / ac4) ** (1.0 / 3.0),
+                      (0.5 * abs(c0) / ac4) ** 0.25)
+    return _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, s2, sgn, c4, c3, c2, c1,
+                       min(horizon, bound), touching)

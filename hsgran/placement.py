@@ -18,13 +18,13 @@ This module also holds the overlap check of a whole set of spheres
 (:func:`overlapping_pairs`, a :class:`scipy.spatial.cKDTree` with periodic images), which the
 scene runs on explicit particles and, as a guard, on everything after placement.
 
-Layer 4: imports ``errors``, ``_jit`` and ``events.grid``.
+Layer 4: imports ``errors``, ``_jit``, ``wallspec`` and ``events.grid``.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -40,6 +40,7 @@ from hsgran.events.grid import (
     plan_grid,
     slot_of,
 )
+from hsgran.wallspec import CY_AXIS, CY_RADIUS, CY_SIDE, CY_SIZE
 
 #: Relative tolerance of the overlap and wall-penetration checks. Spheres written by hand as
 #: touching (centre distance = R1 + R2 in decimal) differ from exact contact by a few ulp after
@@ -98,12 +99,16 @@ class Space:
         plane_normal: Unit normal of each plane [-], shape (P, 3).
         origin: Lower corner of the box [m], shape (3,) (any value without periodic axes).
         period: Length of the box along each periodic axis, 0 along the others [m], shape (3,).
+        cyl_center: The middle of each cylinder's axis [m], shape (C, 3).
+        cyl_row: Each cylinder's hsgran.wallspec ``CY_*`` row, shape (C, CY_SIZE).
     """
 
     plane_point: np.ndarray
     plane_normal: np.ndarray
     origin: np.ndarray
     period: np.ndarray
+    cyl_center: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    cyl_row: np.ndarray = field(default_factory=lambda: np.zeros((0, CY_SIZE)))
 
     @property
     def periodic(self) -> np.ndarray:
@@ -220,8 +225,9 @@ def random_sequential_addition(rng, radii, lower, upper, placed_position, placed
         block = int(min(budget - attempts, max(FILL_MIN_BLOCK, 2 * (n - state[0]))))
         u = rng.random((block, 3))
         attempts += _rsa_kernel(u, order, radii, lower, upper, space.plane_point,
-                                space.plane_normal, grid_position, grid_radius, head, nxt, prv,
-                                origin, size, ncell, period, positions, state, scratch, near)
+                                space.plane_normal, space.cyl_center, space.cyl_row,
+                                grid_position, grid_radius, head, nxt, prv, origin, size, ncell,
+                                period, positions, state, scratch, near)
     return positions, attempts
 
 
@@ -275,9 +281,9 @@ def _pair_distance(delta: np.ndarray, space: Space) -> np.ndarray:
 # ---- the compiled kernel -----------------------------------------------------------------
 
 @njit
-def _rsa_kernel(u, order, radii, lower, upper, plane_point, plane_normal, grid_position,
-                grid_radius, head, nxt, prv, origin, size, ncell, period, positions, state, x,
-                near):
+def _rsa_kernel(u, order, radii, lower, upper, plane_point, plane_normal, cyl_center, cyl_row,
+                grid_position, grid_radius, head, nxt, prv, origin, size, ncell, period,
+                positions, state, x, near):
     """Consume uniform triples ``u`` as candidate centres; returns how many were used.
 
     ``state`` = [next index into ``order``, number of spheres in the grid], updated in place;
@@ -294,6 +300,8 @@ def _rsa_kernel(u, order, radii, lower, upper, plane_point, plane_normal, grid_p
             x[a] = lower[a] + r + u[used, a] * (upper[a] - lower[a] - 2.0 * r)
         used += 1
         if not _clear_of_planes(x, r, plane_point, plane_normal):
+            continue
+        if not _clear_of_cylinders(x, r, cyl_center, cyl_row):
             continue
         if not _clear_of_spheres(x, r, grid_position, grid_radius, head, nxt, origin, size,
                                  ncell, period, near):
@@ -318,6 +326,23 @@ def _clear_of_planes(x, r, plane_point, plane_normal):
         for a in range(3):
             d += (x[a] - plane_point[q, a]) * plane_normal[q, a]
         if d < r:
+            return False
+    return True
+
+
+@njit
+def _clear_of_cylinders(x, r, cyl_center, cyl_row):
+    """Whether a sphere (centre ``x``, radius ``r``) lies wholly on every cylinder's side."""
+    for q in range(cyl_center.shape[0]):
+        s = 0.0
+        for a in range(3):
+            s += (x[a] - cyl_center[q, a]) * cyl_row[q, CY_AXIS + a]
+        d2 = 0.0
+        for a in range(3):
+            c = x[a] - cyl_center[q, a] - s * cyl_row[q, CY_AXIS + a]
+            d2 += c * c
+        gap = cyl_row[q, CY_SIDE] * (cyl_row[q, CY_RADIUS] - math.sqrt(d2))
+        if gap < r:
             return False
     return True
 

@@ -473,6 +473,11 @@ def run_reference(scene, max_collisions: int | None = None,
         ReferenceLoopError: a sphere had more than :data:`MAX_NO_PROGRESS_EVENTS` consecutive
             events without its clock advancing.
     """
+    driven = [w.key for w in scene.walls if getattr(w, "motion", None) is not None
+              or not hasattr(w, "normal")]
+    if driven:
+        raise ValueError(f"the reference loop has fixed planes only ({driven[0]} is a moving "
+                         "plane or a cylinder)")
     t_stop = scene.duration if until is None else float(until)
     ref = _Reference(scene)
     log, t_end = ref.run(t_stop, max_collisions)

@@ -57,8 +57,8 @@ from hsgran.animation import (
 )
 from hsgran.errors import InputError, MissingDependency
 from hsgran.io.h5md import read_trajectory
-from hsgran.scene import Plane, parse_scene
-from hsgran.wallspec import M_KIND, MOT_FIXED
+from hsgran.scene import Cylinder, Plane, parse_scene
+from hsgran.wallspec import CY_AXIS, CY_HALF, CY_OMEGA, CY_RADIUS, CY_SIDE, M_KIND, MOT_FIXED
 
 # ---- environment -------------------------------------------------------------------------
 
@@ -126,6 +126,10 @@ CHECKER_COLORS = ((222, 222, 226), (196, 198, 204))
 #: Texture of one checker period (2 × 2 squares) [px]: large enough that linear filtering only
 #: softens the squares' edges.
 CHECKER_TEXELS = 64
+#: Facets around a cylinder wall, and the stripes along it (an even number; they show a drum
+#: turn).
+CYLINDER_SEGMENTS = 96
+CYLINDER_STRIPES = 24
 #: Walls are shaded by a light fixed in the world, from above, front and right (a direction,
 #: normalised at use), with this share of ambient light [-]: a floor is brightest and the walls
 #: of a box differ from each other.
@@ -322,7 +326,7 @@ def wall_planes(traj) -> tuple[list[Plane], str]:
         planes = [Plane(walls.point[k], walls.normal[k], int(walls.material[k]), walls.key[k],
                         None if motion is None or motion[k, M_KIND] == MOT_FIXED
                         else motion[k])
-                  for k in range(len(walls))]
+                  for k in range(len(walls)) if not walls.is_cylinder(k)]
         return planes, traj.scene_name
     try:
         # the stored text ends with comment lines naming the overrides, which TOML ignores
@@ -342,6 +346,25 @@ def wall_planes(traj) -> tuple[list[Plane], str]:
                 normal[axis] = sign
                 planes.append(Plane(np.array(corner, dtype=float), normal, 0, "box"))
     return planes, ""
+
+
+def wall_cylinders(traj) -> list[Cylinder]:
+    """The cylinder walls to draw (:class:`hsgran.scene.Cylinder`), from the file's walls (or
+    its scene text, as :func:`wall_planes`)."""
+    walls = traj.walls
+    if walls is None:
+        try:
+            return list(parse_scene(traj.scene_text, overrides=traj.overrides or None).cylinders)
+        except InputError:
+            return []  # wall_planes has warned
+    out = []
+    for k in range(len(walls)):
+        if walls.is_cylinder(k):
+            row = walls.cylinder[k]
+            out.append(Cylinder(walls.point[k], row[CY_AXIS:CY_AXIS + 3], float(row[CY_RADIUS]),
+                                float(row[CY_HALF]), bool(row[CY_SIDE] > 0.0),
+                                float(row[CY_OMEGA]), int(walls.material[k]), walls.key[k]))
+    return out
 
 
 class Renderer:
@@ -394,6 +417,7 @@ class Renderer:
         self.plotter.ren_win.SetMultiSamples(0)      # anti-aliasing doubles the frame time
         self.plotter.set_background(BACKGROUND)
         self._add_walls(planes)
+        self._add_cylinders(wall_cylinders(traj))
         if self.mesh_mode:
             self._add_mesh_spheres()
         else:
@@ -443,6 +467,41 @@ class Renderer:
             bounds = [c for a in range(3) for c in (traj.box_lower[a], traj.box_upper[a])]
             self.plotter.add_mesh(pv.Box(bounds).outline(), color=EDGE_COLOR,
                                   line_width=EDGE_WIDTH)
+
+    def _add_cylinders(self, cylinders: list[Cylinder]) -> None:
+        """Each cylinder as a tube with stripes along its axis (they show it turn), seen from
+        the spheres' side only: the near half of a drum hides nothing."""
+        pv = self._pv
+        self._turning = []  # (actor, cylinder) of the rotating ones, turned at every frame
+        for cyl in cylinders:
+            tube = pv.Cylinder(center=cyl.center, direction=cyl.axis, radius=cyl.radius,
+                               height=2.0 * cyl.half_length, resolution=CYLINDER_SEGMENTS,
+                               capping=False)
+            centres = np.asarray(tube.cell_centers().points) - cyl.center
+            ref = np.cross(cyl.axis, [1.0, 0.0, 0.0] if abs(cyl.axis[0]) < 0.9
+                           else [0.0, 1.0, 0.0])
+            angle = np.arctan2(centres @ np.cross(cyl.axis, ref), centres @ ref)
+            stripe = np.floor(angle / (2.0 * np.pi) * CYLINDER_STRIPES).astype(int) % 2
+            tube.cell_data["rgb"] = np.array(CHECKER_COLORS, dtype=np.uint8)[stripe]
+            actor = self.plotter.add_mesh(tube, scalars="rgb", rgb=True, show_scalar_bar=False)
+            if cyl.inside:
+                actor.prop.frontface_culling = True  # the near half is seen from outside
+            else:
+                actor.prop.backface_culling = True
+            if cyl.angular_velocity != 0.0:
+                self._turning.append((actor, cyl))
+
+    def _turn_cylinders(self, t: float) -> None:
+        """Turn the rotating cylinders to their angle Ω t at time t [s]."""
+        for actor, cyl in self._turning:
+            a = np.asarray(cyl.axis, dtype=float)
+            phi = cyl.angular_velocity * t
+            k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+            rot = np.eye(3) + np.sin(phi) * k + (1.0 - np.cos(phi)) * (k @ k)  # Rodrigues
+            m = np.eye(4)
+            m[:3, :3] = rot
+            m[:3, 3] = cyl.center - rot @ cyl.center
+            actor.user_matrix = m
 
     def _add_mesh_spheres(self) -> None:
         """All spheres in one mesh (one draw call: a VTK actor costs ~1.5 ms per frame in
@@ -604,6 +663,7 @@ class Renderer:
         rgb = self.colors(frame.values)
         for actor, plane in self._moving:
             actor.position = tuple(plane.point_at(frame.time) - plane.point)
+        self._turn_cylinders(frame.time)
         if self.mesh_mode:
             self._update_meshes(frame, rgb)
         else:

@@ -94,6 +94,12 @@ from hsgran.overrides import apply_overrides, names_override
 from hsgran.placement import CONTACT_TOLERANCE, Fill, Space, fill_spheres, overlapping_pairs
 from hsgran.system import available_memory
 from hsgran.wallspec import (
+    CY_AXIS,
+    CY_HALF,
+    CY_OMEGA,
+    CY_RADIUS,
+    CY_SIDE,
+    CY_SIZE,
     M_AMP,
     M_DIR,
     M_KIND,
@@ -175,7 +181,10 @@ BOX_KEYS = ("kind", "lower", "upper", "material", "motion")
 MOTION_KEYS = {"oscillation": ("kind", "amplitude", "frequency", "phase", "direction"),
                "velocity": ("kind", "velocity", "start", "travel")}
 BOX_FACES = tuple(f"{side}_{axis}" for axis in "xyz" for side in ("lower", "upper"))
-WALL_KINDS = ("plane", "box")
+CYLINDER_KEYS = ("kind", "center", "axis", "radius", "length", "side", "caps",
+                 "angular_velocity", "material")
+CYLINDER_SIDES = ("inside", "outside")
+WALL_KINDS = ("plane", "box", "cylinder")
 PARTICLE_KEYS = ("material", "radius", "position", "velocity", "angular_velocity")
 FILL_KEYS = ("count", "material", "radius", "region", "speed", "angular_velocity")
 REGION_KEYS = ("lower", "upper")
@@ -213,6 +222,49 @@ class Plane:
         return (np.asarray(position) - self.point) @ self.normal
 
 
+@dataclass(frozen=True, eq=False)
+class Cylinder:
+    """A cylindrical wall, fixed or rotating about its axis (docs/walls.md, "Cylinders").
+
+    Attributes:
+        center: The middle of its axis [m], shape (3,).
+        axis: Unit axis [-], shape (3,).
+        radius: Radius R [m].
+        half_length: Half its length [m]; inside, two planes (``caps``) close its ends,
+            otherwise other walls or a periodic axis do.
+        inside: Whether the spheres are inside it (else outside).
+        angular_velocity: Ω [rad/s] about ``axis`` (right-handed); its surface moves at Ω R.
+        material: Index into :attr:`Scene.material_names`.
+        key: Key path for messages (``walls[0]``).
+    """
+
+    center: np.ndarray
+    axis: np.ndarray
+    radius: float
+    half_length: float
+    inside: bool
+    angular_velocity: float
+    material: int
+    key: str
+
+    def row(self) -> np.ndarray:
+        """Its row of hsgran.wallspec ``CY_*`` values, shape (CY_SIZE,)."""
+        row = np.zeros(CY_SIZE)
+        row[CY_AXIS:CY_AXIS + 3] = self.axis
+        row[CY_RADIUS] = self.radius
+        row[CY_SIDE] = 1.0 if self.inside else -1.0
+        row[CY_OMEGA] = self.angular_velocity
+        row[CY_HALF] = self.half_length
+        return row
+
+    def distance(self, position: np.ndarray) -> np.ndarray:
+        """Distance [m] of points (..., 3) from the surface, positive on the spheres' side."""
+        d = np.asarray(position) - self.center
+        q = d - np.multiply.outer(d @ self.axis, self.axis)
+        rho = np.sqrt(np.einsum("...k,...k->...", q, q))
+        return self.radius - rho if self.inside else rho - self.radius
+
+
 @dataclass(eq=False)
 class Scene:
     """A validated scene in SI units.
@@ -225,7 +277,8 @@ class Scene:
         seed: Seed of the random fills.
         periodic: Periodic flag per axis (x, y, z).
         box_lower, box_upper: Corners of the box wall [m], shape (3,), or ``None``.
-        planes: Every plane wall, box faces included (none on a periodic axis).
+        planes: Every plane wall, box faces and cylinder caps included (none on a periodic
+            axis).
         frame_interval: Time between output frames [s].
         library: Built-in and declared materials and contacts.
         material_names: Materials used by particles or walls; the index is the material id.
@@ -248,6 +301,8 @@ class Scene:
             (:mod:`hsgran.overrides`); ``text`` then ends with :func:`override_note`.
         observables: Sum the stress and the wall impulses of every frame interval
             (``[output] observables``, docs/observables.md).
+        cylinders: The cylinder walls; the engine's wall rows are ``planes`` then these
+            (:attr:`walls`).
     """
 
     name: str
@@ -275,6 +330,12 @@ class Scene:
     treatment: str = "pairwise"
     overrides: dict = field(default_factory=dict)
     observables: bool = False
+    cylinders: tuple = ()
+
+    @property
+    def walls(self) -> tuple:
+        """Every wall in the order of the engine's wall rows: the planes, then the cylinders."""
+        return tuple(self.planes) + tuple(self.cylinders)
 
     @property
     def effective_landing_speed(self) -> float:
@@ -580,24 +641,26 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     names = _sphere_names(particles, fills)
     explicit = _explicit_spheres(particles, material_names)
     planes = _make_planes(walls, head.periodic, material_names)
-    _check_moving(planes, enduring.treatment)
-    space = _space(planes, walls, head.periodic)
+    cylinders = _make_cylinders(walls, material_names)
+    _check_moving(planes, cylinders, enduring.treatment)
+    space = _space(planes, cylinders, walls, head.periodic)
 
     # everything that does not need the fills' positions, before the (costly) placement
     _check_grid(walls, head.periodic, np.concatenate([explicit.radius,
                                                       [f.radius[1] for f in fills]]))
     _check_explicit(walls, head.periodic, explicit.position, names)
     _check_overlaps(explicit.position, explicit.radius, space, names)
-    _check_planes(planes, explicit.position, explicit.radius, names)
+    _check_planes(planes + list(cylinders), explicit.position, explicit.radius, names)
     _check_friction(head.effects, library, material_names,
-                    _sphere_counts(explicit, fills, material_names), planes)
+                    _sphere_counts(explicit, fills, material_names),
+                    planes + list(cylinders))
     _check_plasticity(doc, head.effects, sphere_materials)
 
     spheres = _place_fills(head.seed, fills, explicit, space, material_names)
     if fills:
         # placement guarantees both; re-checking all spheres costs little and guards it
         _check_overlaps(spheres.position, spheres.radius, space, names)
-        _check_planes(planes, spheres.position, spheres.radius, names)
+        _check_planes(planes + list(cylinders), spheres.position, spheres.radius, names)
 
     return Scene(
         name=head.name,
@@ -624,6 +687,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
         tc_time=enduring.tc_time,
         treatment=enduring.treatment,
         observables=observables,
+        cylinders=cylinders,
     )
 
 
@@ -727,6 +791,9 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
         if kind not in WALL_KINDS:
             raise InputError(f"unknown wall kind '{kind}'{did_you_mean(kind, WALL_KINDS)}; "
                              f"known: {', '.join(WALL_KINDS)}", f"{key}.kind")
+        if kind == "cylinder":
+            entries.append(_parse_cylinder(w, key, library, periodic))
+            continue
         if kind == "plane":
             _check_keys(w, PLANE_KEYS, key)
             point = _vector(_require(w, "point", key, "a point of the plane [x, y, z] in m"),
@@ -772,6 +839,62 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
         raise InputError(f"periodic along {axes} needs a [[walls]] entry of kind = \"box\" "
                          "giving the period", "scene.periodic")
     return _Walls(entries, box_lower, box_upper, box_key)
+
+
+def _parse_cylinder(w: dict, key: str, library: MaterialLibrary, periodic: tuple) -> dict:
+    """A ``kind = "cylinder"`` entry → its checked values (docs/walls.md, "Cylinders")."""
+    _check_keys(w, CYLINDER_KEYS, key)
+    center = _vector(_require(w, "center", key, "the middle of its axis [x, y, z] in m"),
+                     f"{key}.center")
+    axis = _vector(_require(w, "axis", key, "its direction [x, y, z]"), f"{key}.axis")
+    length = float(np.linalg.norm(axis))
+    if length == 0.0 or not math.isfinite(length):
+        raise InputError("must be a non-zero vector (the cylinder's direction)", f"{key}.axis")
+    axis = axis / length
+    radius = check_positive(_require(w, "radius", key, "in m"), f"{key}.radius", "m")
+    extent = check_positive(_require(w, "length", key, "in m, along the axis"),
+                            f"{key}.length", "m")
+    side = _string(w.get("side", "inside"), f"{key}.side")
+    if side not in CYLINDER_SIDES:
+        raise InputError(f"unknown side '{side}'{did_you_mean(side, CYLINDER_SIDES)}; known: "
+                         f"{', '.join(CYLINDER_SIDES)}", f"{key}.side")
+    inside = side == "inside"
+    along = [i for i in range(3) if periodic[i]]
+    for i in along:
+        if abs(abs(axis[i]) - 1.0) > PARALLEL_TOLERANCE:
+            raise InputError(f"a cylinder must lie along the periodic axis {AXES[i]}",
+                             f"{key}.axis")
+    caps = w.get("caps", inside and not along)
+    if not isinstance(caps, bool):
+        raise InputError(f"must be true or false, got {caps!r}", f"{key}.caps")
+    if caps and not inside:
+        raise InputError("only a cylinder with the spheres inside has caps (outside, close "
+                         "the scene with planes or a box)", f"{key}.caps")
+    if caps and along:
+        raise InputError(f"a cylinder along the periodic axis {AXES[along[0]]} has no caps",
+                         f"{key}.caps")
+    omega = check_number(w.get("angular_velocity", 0.0), f"{key}.angular_velocity")
+    material = _material_name(library, _require(w, "material", key, "a material name"),
+                              f"{key}.material")
+    return dict(kind="cylinder", key=key, center=center, axis=axis, radius=radius,
+                half_length=0.5 * extent, inside=inside, caps=caps, angular_velocity=omega,
+                material=material)
+
+
+def _make_cylinders(walls: _Walls, material_names: list[str]) -> tuple:
+    """The cylinder walls, in file order."""
+    out = []
+    for w in walls.entries:
+        if w["kind"] != "cylinder":
+            continue
+        center = np.array(w["center"], dtype=float)
+        axis = np.array(w["axis"], dtype=float)
+        center.setflags(write=False)
+        axis.setflags(write=False)
+        out.append(Cylinder(center, axis, float(w["radius"]), float(w["half_length"]),
+                            bool(w["inside"]), float(w["angular_velocity"]),
+                            material_names.index(w["material"]), w["key"]))
+    return tuple(out)
 
 
 def _parse_motion(tab, key: str, normal: np.ndarray) -> np.ndarray:
@@ -839,11 +962,13 @@ def _box_motions(w: dict, key: str, periodic: tuple) -> dict:
     return motions
 
 
-def _check_moving(planes: list[Plane], treatment: str) -> None:
-    moving = [p.key for p in planes if p.motion is not None]
+def _check_moving(planes: list[Plane], cylinders: tuple, treatment: str) -> None:
+    moving = ([p.key for p in planes if p.motion is not None]
+              + [c.key for c in cylinders])
     if moving and treatment == "clusters":
-        raise InputError(f"moving walls ({moving[0]}) are not supported with the cluster "
-                         "treatment yet; use \"pairwise\"", "enduring_contact.treatment")
+        raise InputError(f"moving walls and cylinders ({moving[0]}) are not supported with "
+                         "the cluster treatment yet; use \"pairwise\"",
+                         "enduring_contact.treatment")
 
 
 def _check_periodic_planes(walls: _Walls, periodic: tuple) -> None:
@@ -860,7 +985,7 @@ def _check_periodic_planes(walls: _Walls, periodic: tuple) -> None:
 def _wall_materials(walls: _Walls, periodic: tuple) -> list[str]:
     """Materials of the walls that produce at least one plane, in file order."""
     return [w["material"] for w in walls.entries
-            if w["material"] is not None and (w["kind"] == "plane" or not all(periodic))]
+            if w["material"] is not None and (w["kind"] != "box" or not all(periodic))]
 
 
 def _make_planes(walls: _Walls, periodic: tuple, material_names: list[str]) -> list[Plane]:
@@ -871,6 +996,13 @@ def _make_planes(walls: _Walls, periodic: tuple, material_names: list[str]) -> l
             planes.append(_frozen_plane(w["point"], w["normal"],
                                         material_names.index(w["material"]), w["key"],
                                         w["motion"]))
+            continue
+        if w["kind"] == "cylinder":
+            if w["caps"]:  # two planes close its ends, facing each other
+                for end, sign in (("lower", 1.0), ("upper", -1.0)):
+                    planes.append(_frozen_plane(
+                        w["center"] - sign * w["half_length"] * w["axis"], sign * w["axis"],
+                        material_names.index(w["material"]), f"{w['key']}.cap_{end}"))
             continue
         for i in range(3):
             if periodic[i]:
@@ -894,7 +1026,7 @@ def _frozen_plane(point: np.ndarray, normal: np.ndarray, material: int, key: str
     return Plane(point, normal, material, key, motion)
 
 
-def _space(planes: list[Plane], walls: _Walls, periodic: tuple) -> Space:
+def _space(planes: list[Plane], cylinders: tuple, walls: _Walls, periodic: tuple) -> Space:
     """Where spheres may lie, for placement and the overlap checks."""
     if walls.box_key is None:
         origin, period = np.zeros(3), np.zeros(3)
@@ -903,7 +1035,10 @@ def _space(planes: list[Plane], walls: _Walls, periodic: tuple) -> Space:
         period = np.where(periodic, walls.box_upper - walls.box_lower, 0.0)
     return Space(plane_point=np.array([p.point for p in planes], dtype=float).reshape(-1, 3),
                  plane_normal=np.array([p.normal for p in planes], dtype=float).reshape(-1, 3),
-                 origin=origin, period=period)
+                 origin=origin, period=period,
+                 cyl_center=np.array([c.center for c in cylinders], dtype=float).reshape(-1, 3),
+                 cyl_row=np.array([c.row() for c in cylinders],
+                                  dtype=float).reshape(-1, CY_SIZE))
 
 
 # -- [[particles]] --
@@ -1101,9 +1236,10 @@ def _check_overlaps(position: np.ndarray, radius: np.ndarray, space: Space,
             f"the tolerance of {CONTACT_TOLERANCE:g} of it)", names.position_key(j))
 
 
-def _check_planes(planes: list[Plane], position: np.ndarray, radius: np.ndarray,
+def _check_planes(walls: list, position: np.ndarray, radius: np.ndarray,
                   names: _Names) -> None:
-    for plane in planes:
+    """Every sphere on the spheres' side of every wall (planes and cylinders)."""
+    for plane in walls:
         d = plane.distance(position)
         bad = np.flatnonzero(d < radius * (1.0 - CONTACT_TOLERANCE))
         if bad.size:
@@ -1111,7 +1247,8 @@ def _check_planes(planes: list[Plane], position: np.ndarray, radius: np.ndarray,
             where = ("lies behind" if d[k] < 0.0 else "penetrates")
             dk, rk = _fmt_apart(float(d[k]), float(radius[k]))
             raise InputError(
-                f"{names.label(k)} {where} wall {plane.key} (centre {dk} m from the plane, "
+                f"{names.label(k)} {where} wall {plane.key} (centre {dk} m from "
+                f"{'the plane' if isinstance(plane, Plane) else 'its surface'}, "
                 f"radius {rk} m, beyond the tolerance of {CONTACT_TOLERANCE:g} of the radius; "
                 "the normal points to where spheres live)", names.position_key(k))
 

@@ -1,6 +1,9 @@
-"""The prescribed motions of plane walls, as numbers (layer 1; no numba: files and drawings
-read them too). :mod:`hsgran.wallmotion` compiles these functions for the event loop and adds
-the contact time with a moving plane (docs/walls.md).
+"""The walls' kinds, the prescribed motions of planes and the cylinders' geometry, as numbers
+(layer 1; no numba: files and drawings read them too). :mod:`hsgran.wallmotion` compiles these
+functions for the event loop and adds the contact time with a moving plane (docs/walls.md).
+
+The engine keeps one row per wall (``Walls.planes_*``): the planes first, then the cylinders;
+``Walls.planes_kind`` says which (``WK_*``).
 
 A moving plane keeps its normal and translates along a unit direction d: p(t) = p₀ + d s(t),
 s(0) = 0. Each plane's motion is one row of ``M_*`` values (``Walls.planes_mot``); a fixed
@@ -10,6 +13,20 @@ plane has kind ``MOT_FIXED``.
 from __future__ import annotations
 
 import math
+
+WK_PLANE = 0  #: a fixed plane
+WK_MOVING = 1  #: a plane with a prescribed motion (``planes_mot``)
+#: a cylinder (``planes_cyl``; its row's ``planes_p`` is the centre of its axis, and its
+#: ``planes_n``, ``planes_vel``, ``planes_omg`` describe its last contact: the normal there, the
+#: surface velocity, the wall's angular velocity)
+WK_CYLINDER = 2
+
+CY_AXIS = 0  #: unit axis a, columns 0–2
+CY_RADIUS = 3  #: radius R [m]
+CY_SIDE = 4  #: +1: the spheres are inside; −1: outside
+CY_OMEGA = 5  #: angular velocity Ω about a [rad/s] (right-handed)
+CY_HALF = 6  #: half its length [m] (for drawings; its ends are closed by planes)
+CY_SIZE = 7
 
 MOT_FIXED = 0  #: the plane does not move
 MOT_OSCILLATION = 1  #: s(t) = A [sin(ω t + φ) − sin φ]
@@ -47,3 +64,15 @@ def wall_speed(mot, w, t):
         return speed if t0 <= t < t0 + mot[w, M_TRAVEL] / speed else 0.0
     return 0.0
 
+
+
+def cylinder_bounds(center, row):
+    """Lower and upper corners [m] of the box around a cylinder (centre ``center`` [m], its
+    ``CY_*`` row), each a (3,) tuple."""
+    lower, upper = [], []
+    for k in range(3):
+        a = row[CY_AXIS + k]
+        reach = row[CY_RADIUS] * math.sqrt(max(1.0 - a * a, 0.0)) + row[CY_HALF] * abs(a)
+        lower.append(center[k] - reach)
+        upper.append(center[k] + reach)
+    return tuple(lower), tuple(upper)

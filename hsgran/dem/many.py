@@ -375,6 +375,11 @@ def _check_scene(scene) -> None:
         if getattr(eff, name):
             raise InputError(f"effect '{name}' is not modelled by the fixed-step integrator",
                              "effects")
+    driven = [w.key for w in scene.walls if getattr(w, "motion", None) is not None
+              or not hasattr(w, "normal")]
+    if driven:
+        raise InputError("the fixed-step integrator has fixed planes only (a moving plane or "
+                         "a cylinder is not modelled)", driven[0])
 
 
 def run_fixed_step(scene, *, dt: float, until: float, frame_interval: float,

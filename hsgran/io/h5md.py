@@ -53,7 +53,7 @@ import numpy as np
 
 from hsgran.errors import InputError
 from hsgran.system import available_memory
-from hsgran.wallspec import M_DIR, M_KIND, M_SIZE, MOT_FIXED, wall_shift
+from hsgran.wallspec import CY_RADIUS, CY_SIZE, M_DIR, M_KIND, M_SIZE, MOT_FIXED, wall_shift
 
 #: H5MD specification version the files conform to (``/h5md@version``).
 H5MD_VERSION = (1, 1)
@@ -202,15 +202,19 @@ _UTF8 = h5py.string_dtype("utf-8")
 
 @dataclass
 class Walls:
-    """The plane walls a run simulated, box faces included, one row per plane.
+    """The walls a run simulated, one row each: the planes (box faces and cylinder caps
+    included), then the cylinders.
 
     Attributes:
-        point: A point of each plane [m], shape (P, 3).
-        normal: Unit normal of each plane [-], shape (P, 3), pointing to where spheres live.
-        material: Material index of each plane, shape (P,), into the material names.
-        key: Key path of each plane in the scene (``walls[0]``, ``walls[1].lower_z``).
-        motion: Each plane's prescribed motion, shape (P, 8): the ``M_*`` columns of
-            :mod:`hsgran.wallmotion` (kind 0 for a fixed plane; ``point`` is the plane at t = 0).
+        point: A point of each plane, the middle of each cylinder's axis [m], shape (W, 3).
+        normal: Unit normal of each plane [-], shape (W, 3), pointing to where spheres live
+            (zeros for a cylinder).
+        material: Material index of each wall, shape (W,), into the material names.
+        key: Key path of each wall in the scene (``walls[0]``, ``walls[1].lower_z``).
+        motion: Each plane's prescribed motion, shape (W, 8): the ``M_*`` columns of
+            :mod:`hsgran.wallspec` (kind 0 for a fixed plane; ``point`` is the plane at t = 0).
+        cylinder: Each cylinder's geometry, shape (W, CY_SIZE): the ``CY_*`` columns of
+            :mod:`hsgran.wallspec` (radius 0 for a plane), or ``None`` without cylinders.
     """
 
     point: np.ndarray
@@ -218,6 +222,11 @@ class Walls:
     material: np.ndarray
     key: list[str]
     motion: np.ndarray | None = None
+    cylinder: np.ndarray | None = None
+
+    def is_cylinder(self, k: int) -> bool:
+        """Whether wall k is a cylinder."""
+        return self.cylinder is not None and self.cylinder[k, CY_RADIUS] > 0.0
 
     def shift(self, k: int, t: float) -> np.ndarray:
         """How far plane k has moved at time t [s] [m], shape (3,)."""
@@ -226,16 +235,26 @@ class Walls:
         return self.motion[k, M_DIR:M_DIR + 3] * wall_shift(self.motion, k, float(t))
 
     @classmethod
-    def of(cls, planes) -> Walls:
-        """The walls of ``planes``: objects with ``point``, ``normal``, ``material`` and ``key``
-        attributes (:class:`hsgran.scene.Plane`)."""
-        planes = list(planes)
-        return cls(point=np.array([p.point for p in planes], dtype=np.float64).reshape(-1, 3),
-                   normal=np.array([p.normal for p in planes], dtype=np.float64).reshape(-1, 3),
-                   material=np.array([p.material for p in planes], dtype=np.int32),
-                   key=[str(p.key) for p in planes],
-                   motion=np.array([np.zeros(M_SIZE) if p.motion is None else p.motion
-                                    for p in planes], dtype=np.float64).reshape(-1, M_SIZE))
+    def of(cls, walls) -> Walls:
+        """The walls of ``walls`` (:attr:`hsgran.scene.Scene.walls`): planes with ``point``,
+        ``normal``, ``motion``, ``material`` and ``key`` attributes, and cylinders with
+        ``center`` and ``row()`` in their place (:class:`hsgran.scene.Cylinder`)."""
+        walls = list(walls)
+        point, normal, motion, cylinder = [], [], [], []
+        for w in walls:
+            is_cyl = hasattr(w, "row")
+            point.append(w.center if is_cyl else w.point)
+            normal.append(np.zeros(3) if is_cyl else w.normal)
+            motion.append(np.zeros(M_SIZE) if is_cyl or w.motion is None else w.motion)
+            cylinder.append(w.row() if is_cyl else np.zeros(CY_SIZE))
+        has_cyl = any(hasattr(w, "row") for w in walls)
+        return cls(point=np.array(point, dtype=np.float64).reshape(-1, 3),
+                   normal=np.array(normal, dtype=np.float64).reshape(-1, 3),
+                   material=np.array([w.material for w in walls], dtype=np.int32),
+                   key=[str(w.key) for w in walls],
+                   motion=np.array(motion, dtype=np.float64).reshape(-1, M_SIZE),
+                   cylinder=(np.array(cylinder, dtype=np.float64).reshape(-1, CY_SIZE)
+                             if has_cyl else None))
 
     def __len__(self) -> int:
         return int(self.point.shape[0])
@@ -584,6 +603,8 @@ class TrajectoryWriter:
                                  dtype=_UTF8)
             if walls.motion is not None and np.any(walls.motion[:, M_KIND] != MOT_FIXED):
                 group.create_dataset("motion", data=walls.motion)
+            if walls.cylinder is not None:
+                group.create_dataset("cylinder", data=walls.cylinder)
         if pair_table is not None:
             parameters.create_dataset(PAIR_TABLE, data=pair_table)
 
@@ -1074,7 +1095,8 @@ def _read_walls(parameters: h5py.Group) -> Walls | None:
     group = parameters[WALLS]
     return Walls(point=group["point"][()], normal=group["normal"][()],
                  material=group["material"][()], key=[_text(k) for k in group["key"][()]],
-                 motion=group["motion"][()] if "motion" in group else None)
+                 motion=group["motion"][()] if "motion" in group else None,
+                 cylinder=group["cylinder"][()] if "cylinder" in group else None)
 
 
 def _read_pair_table(parameters: h5py.Group) -> np.ndarray | None:
@@ -1175,7 +1197,9 @@ def _checked_walls(walls: Walls, n_materials: int) -> Walls:
         raise ValueError(f"walls.key: expected {p} key paths, got {len(walls.key)}")
     motion = (None if walls.motion is None
               else _checked(walls.motion, "walls.motion", (p, M_SIZE), np.float64))
-    return Walls(point, normal, material, [str(k) for k in walls.key], motion)
+    cylinder = (None if walls.cylinder is None
+                else _checked(walls.cylinder, "walls.cylinder", (p, CY_SIZE), np.float64))
+    return Walls(point, normal, material, [str(k) for k in walls.key], motion, cylinder)
 
 
 def _seed_attribute(seed):

@@ -1,0 +1,276 @@
+"""Cylinder walls (docs/walls.md, "Cylinders"): the contact search against a fine-grid oracle,
+elastic gases inside a drum and around a post, a ball bouncing in a drum under gravity, the drag
+of a rotating drum, the scene keys, the file and the exported drawing."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from hsgran.engine import Simulation
+from hsgran.errors import InputError
+from hsgran.events.kinds import EV_WALL
+from hsgran.motion import cylinder_contact_time
+from hsgran.scene import parse_scene
+from tests.observers import Keep
+
+#: A contact time is a root of the squared-distance quartic to this share of ρ² [-] (rounding
+#: of |q|² near ρ², a few ulp of the terms).
+ROOT_REL = 1e-12
+#: Elastic runs keep their energy to this share [-] (rounding over ~10⁴ collisions).
+ENERGY_REL = 1e-11
+#: Spheres stay clear of the walls to this [m] (the touching tolerance of the contact times).
+OVERLAP_TOL = 1e-12
+
+
+def run(text, **kw):
+    """Run a scene; return the scene, its frames (time, position, velocity) and event log."""
+    scene = parse_scene(text)
+    sim = Simulation(scene, log_events=True)
+    keep = Keep()
+    sim.run(observers=[keep], **kw)
+    frames = {name: keep.cat(name) for name in ("time", "position", "velocity")}
+    log = {name: keep.log(name) for name in ("time", "kind", "i", "j")}
+    return scene, frames, log
+
+
+def energy(scene, frames):
+    """Kinetic plus potential energy of every frame [J] (no rotation in these scenes)."""
+    m = scene.mass()
+    ke = 0.5 * np.einsum("i,fik,fik->f", m, frames["velocity"], frames["velocity"])
+    return ke - np.einsum("i,fik,k->f", m, frames["position"], scene.gravity)
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_the_contact_search_finds_the_first_touch(side):
+    """Random parabolas inside (side +1) and outside (−1) a cylinder: the time found is a root
+    of |q(τ)|² = ρ², and the sphere is clear of the surface on a fine grid before it."""
+    rng = np.random.default_rng(11 if side > 0 else 12)
+    found = 0
+    for _ in range(300):
+        rho = rng.uniform(0.01, 0.1)
+        q0 = rng.normal(size=3)
+        q0[2] = 0.0  # the axis is z: q lies in the x-y plane
+        q0 *= (rng.uniform(0.0, 0.99) if side > 0 else rng.uniform(1.01, 3.0)) * rho \
+            / np.linalg.norm(q0)
+        u = np.array([*rng.normal(0.0, 0.5, 2), 0.0])
+        g = np.array([*rng.normal(0.0, 10.0, 2), 0.0]) * rng.integers(0, 2)
+        horizon = 1.0
+
+        def clear(tau, q0=q0, u=u, g=g, rho=rho):
+            q = q0[:, None] + np.outer(u, tau) + 0.5 * np.outer(g, tau * tau)
+            return side * (rho * rho - (q * q).sum(0))
+
+        tau = cylinder_contact_time(*q0, *u, *g, rho, side, horizon)
+        grid = np.linspace(0.0, min(tau, horizon), 20001)[:-1]
+        assert np.all(clear(grid) > -ROOT_REL * rho * rho)
+        if tau < horizon:
+            found += 1
+            assert abs(clear(np.array([tau]))[0]) < ROOT_REL * rho * rho
+        else:  # none within the horizon: the oracle finds none either
+            ts = np.linspace(0.0, horizon, 200001)
+            assert np.all(clear(ts) > -ROOT_REL * rho * rho)
+    assert found > 50  # many flights meet the wall (inside: all that turn back or fall)
+
+
+GAS = """
+[scene]
+name = "gas in a drum"
+duration = 0.5
+effects = []
+seed = {seed}
+[output]
+frame_interval = 0.005
+[[walls]]
+kind = "cylinder"
+center = [0.0, 0.0, 0.0]
+axis = [{ax}, {ay}, {az}]
+radius = 0.03
+length = 0.02
+material = "steel"
+[[fill]]
+count = 40
+material = "steel"
+radius = 0.002
+region = {{ lower = [-0.03, -0.03, -0.03], upper = [0.03, 0.03, 0.03] }}
+speed = 0.5
+"""
+
+
+@pytest.mark.parametrize(("seed", "axis"), [(1, (0.0, 1.0, 0.0)), (2, (1.0, 1.0, 1.0))])
+def test_an_elastic_gas_in_a_closed_drum_keeps_its_energy_and_stays_inside(seed, axis):
+    scene, frames, log = run(GAS.format(seed=seed, ax=axis[0], ay=axis[1], az=axis[2]))
+    cyl = scene.cylinders[0]
+    e = energy(scene, frames)
+    assert abs(e[-1] / e[0] - 1.0) < ENERGY_REL
+    gaps = cyl.distance(frames["position"]) - scene.radius
+    assert gaps.min() > -OVERLAP_TOL
+    for cap in scene.planes:
+        assert (cap.distance(frames["position"]) - scene.radius).min() > -OVERLAP_TOL
+    # the curved wall (the last wall row) was hit many times
+    assert np.count_nonzero((log["kind"] == EV_WALL) & (log["j"] == -1 - 2)) > 100
+
+
+POST = """
+[scene]
+name = "gas around a post"
+duration = 0.5
+effects = []
+seed = 4
+[output]
+frame_interval = 0.005
+[[walls]]
+kind = "box"
+lower = [-0.03, -0.03, -0.01]
+upper = [0.03, 0.03, 0.01]
+material = "steel"
+[[walls]]
+kind = "cylinder"
+center = [0.0, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+radius = 0.012
+length = 0.02
+side = "outside"
+material = "steel"
+[[fill]]
+count = 40
+material = "steel"
+radius = 0.002
+region = { lower = [-0.03, -0.03, -0.01], upper = [0.03, 0.03, 0.01] }
+speed = 0.5
+"""
+
+
+def test_an_elastic_gas_around_a_post_keeps_its_energy_and_stays_outside():
+    scene, frames, log = run(POST)
+    e = energy(scene, frames)
+    assert abs(e[-1] / e[0] - 1.0) < ENERGY_REL
+    post = scene.cylinders[0]
+    assert (post.distance(frames["position"]) - scene.radius).min() > -OVERLAP_TOL
+    row = len(scene.planes)
+    assert np.count_nonzero((log["kind"] == EV_WALL) & (log["j"] == -1 - row)) > 50
+
+
+BALL = """
+[scene]
+name = "ball in a drum"
+duration = {duration}
+effects = ["gravity"{more}]
+[output]
+frame_interval = 0.01
+[[walls]]
+kind = "cylinder"
+center = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+radius = 0.05
+length = 0.01
+angular_velocity = {omega}
+material = "steel"
+[[particles]]
+material = "steel"
+radius = 0.002
+position = [{x}, 0.0, {z}]
+velocity = [{u}, 0.0, {w}]
+"""
+
+
+def test_an_elastic_ball_bounces_in_a_drum_on_its_parabolas():
+    """Every wall event finds the ball at R − r from the axis, and the energy is kept."""
+    scene, frames, log = run(BALL.format(duration=2.0, more="", omega=0.0, x=0.01, z=0.0,
+                                         u=0.3, w=0.2))
+    e = energy(scene, frames)
+    assert abs(e[-1] / e[0] - 1.0) < ENERGY_REL
+    assert np.count_nonzero(log["kind"] == EV_WALL) > 20
+    sim = Simulation(scene)
+    for _ in range(20):  # the ball's stored state after each hit is where it touched
+        sim.run(max_collisions=1)
+        assert abs(np.hypot(sim.pos[0, 0], sim.pos[0, 2]) - (0.05 - 0.002)) < 1e-12
+
+
+@pytest.mark.parametrize("omega", [4.0, -4.0])
+def test_a_rotating_drum_drags_the_sphere_it_hits(omega):
+    """Without gravity a sphere thrown straight at a rotating drum's wall leaves rolling on
+    the surface (μ J_n exceeds the impulse that stops the slip): its tangential velocity is
+    2/7 of the surface's, Ω R, in the surface's direction (MODEL §4, a solid sphere, k = 2/5),
+    and the normal velocity is reversed (elastic)."""
+    text = BALL.format(duration=0.2, more=', "friction", "rotation"', omega=omega, x=0.0,
+                       z=0.0, u=0.0, w=-0.5).replace('effects = ["gravity", ', "effects = [")
+    text += "[[contacts]]\nbetween = [\"steel\", \"steel\"]\nsliding_friction = 0.3\n"
+    _scene, frames, log = run(text)
+    assert np.count_nonzero(log["kind"] == EV_WALL) == 1
+    v = frames["velocity"][-1, 0]
+    # at the bottom (−z) the surface moves along Ω ŷ × (−R ẑ) = −Ω R x̂
+    assert v[0] == pytest.approx(-2.0 / 7.0 * omega * 0.05, rel=1e-12)
+    assert v[2] == pytest.approx(0.5, rel=1e-12)
+
+
+@pytest.mark.parametrize(("change", "needle"), [
+    (('side = "outside"', 'side = "around"'), "walls[0].side"),
+    (('radius = 0.03', 'radius = -0.03'), "walls[0].radius"),
+    (('length = 0.02', 'length = 0.0'), "walls[0].length"),
+    (('axis = [0.0, 1.0, 0.0]', 'axis = [0.0, 0.0, 0.0]'), "walls[0].axis"),
+    (('material = "steel"\n[[fill]]', 'material = "steel"\ncaps = true\n[[fill]]'),
+     "walls[0].caps"),
+    (('kind = "cylinder"', 'kind = "cylindre"'), "walls[0].kind"),
+    (('length = 0.02', 'length = 0.02\nspin = 3.0'), "walls[0]"),
+])
+def test_bad_cylinders_name_their_key(change, needle):
+    text = GAS.format(seed=1, ax=0.0, ay=1.0, az=0.0).replace(
+        'length = 0.02', 'length = 0.02\nside = "outside"').replace(
+        'region = { lower = [-0.03, -0.03, -0.03], upper = [0.03, 0.03, 0.03] }',
+        'region = { lower = [0.04, -0.03, -0.03], upper = [0.09, 0.03, 0.03] }')
+    parse_scene(text)  # the unchanged scene is valid
+    old, new = change
+    assert old in text
+    with pytest.raises(InputError) as err:
+        parse_scene(text.replace(old, new, 1))
+    assert needle in str(err.value)
+
+
+def test_spheres_must_start_on_the_cylinders_side():
+    text = BALL.format(duration=0.1, more="", omega=0.0, x=0.049, z=0.0, u=0.0, w=0.0)
+    with pytest.raises(InputError) as err:
+        parse_scene(text)
+    assert "particles[0].position" in str(err.value)
+    assert "walls[0]" in str(err.value)
+
+
+def test_cylinders_are_refused_with_the_cluster_treatment():
+    text = BALL.format(duration=0.1, more="", omega=0.0, x=0.0, z=0.0, u=0.0, w=0.0)
+    with pytest.raises(InputError) as err:
+        parse_scene(text + '[enduring_contact]\ntreatment = "clusters"\n')
+    assert "enduring_contact.treatment" in str(err.value)
+
+
+def test_cylinders_in_files_and_exported_drawings(tmp_path):
+    from hsgran.api import run_scene
+    from hsgran.io.h5md import read_trajectory
+
+    text = BALL.format(duration=0.1, more="", omega=2.0, x=0.0, z=0.0, u=0.0, w=0.0)
+    path = tmp_path / "drum.toml"
+    path.write_text(text)
+    scene = parse_scene(text)
+    run_scene(path, tmp_path / "drum.h5")
+    walls = read_trajectory(tmp_path / "drum.h5").walls
+    assert walls.key == [w.key for w in scene.walls]
+    k = len(scene.planes)
+    assert walls.is_cylinder(k)
+    assert not walls.is_cylinder(0)
+    np.testing.assert_array_equal(walls.cylinder[k], scene.cylinders[0].row())
+    np.testing.assert_array_equal(walls.point[k], scene.cylinders[0].center)
+    pytest.importorskip("pyvista")
+    import pyvista as pv
+
+    from hsgran.export import export
+
+    result = export(tmp_path / "drum.h5", "vtk", tmp_path / "vtk")
+    reader = pv.get_reader(str(result.output))
+    drawn = reader.read()[1]
+    on_tube = np.abs(np.hypot(drawn.points[:, 0], drawn.points[:, 2]) - 0.05) < 1e-9
+    assert np.count_nonzero(on_tube) > 100
+    # the tube's normals point to the axis (the spheres are inside)
+    centres = np.asarray(drawn.cell_centers().points)
+    tube = np.abs(np.hypot(centres[:, 0], centres[:, 2]) - 0.05) < 1e-3
+    n = np.asarray(drawn.cell_data["normal"])[tube]
+    radial = centres[tube] * [1.0, 0.0, 1.0]
+    assert np.all(np.einsum("ij,ij->i", n, radial) < 0.0)
