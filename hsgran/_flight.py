@@ -14,22 +14,21 @@ from __future__ import annotations
 
 import numpy as np
 
+from hsgran._cylinder import (
+    carried_velocity,
+    cylinder_gap,
+    cylinder_load,
+    cylinder_normal,
+    enter_cylinder,
+    set_cylinder_contact,
+)
 from hsgran._jit import njit
 from hsgran._state import F_CHI, F_TC_TIME, S_R, S_T, S_V
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, approach_noise, flight_position
 from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
 from hsgran.wallmotion import wall_shift, wall_speed
-from hsgran.wallspec import (
-    CY_AXIS,
-    CY_OMEGA,
-    CY_RADIUS,
-    CY_SIDE,
-    M_DIR,
-    WK_CYLINDER,
-    WK_MOVING,
-    WK_PLANE,
-)
+from hsgran.wallspec import CY_AXIS, CY_OMEGA, M_DIR, WK_CYLINDER, WK_MOVING, WK_PLANE
 
 #: A sphere whose gap to a plane is within this fraction of its radius counts as touching it
 #: [-]: a gap of 1e-10 R is far above the rounding of a position dotted with a normal (~1e-16 of
@@ -126,9 +125,12 @@ def pressed(i, w, st, walls, gravity):
     """(normal load per unit mass g_n = −g·n [m/s²], normal velocity v·n [m/s]) of sphere i
     against plane w."""
     planes_n = walls.planes_n
+    vn = st[i, 3] * planes_n[w, 0] + st[i, 4] * planes_n[w, 1] + st[i, 5] * planes_n[w, 2]
+    if curved(walls, w):  # its row describes the contact with sphere i (wall_gap)
+        return cylinder_load(st[i, 0], st[i, 1], st[i, 2], st[i, 3], st[i, 4], st[i, 5],
+                             gravity, walls, w), vn
     gn = -(gravity[0] * planes_n[w, 0] + gravity[1] * planes_n[w, 1]
            + gravity[2] * planes_n[w, 2])
-    vn = st[i, 3] * planes_n[w, 0] + st[i, 4] * planes_n[w, 1] + st[i, 5] * planes_n[w, 2]
     return gn, vn
 
 
@@ -159,7 +161,13 @@ def leave_plane(i, flight, dyn, gravity, rotation):
 def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
                  rotation):
     """Put sphere i on plane w at time t (or start its next segment there; ``snap`` is the
-    transition that ended the last one): MODEL §5.3 through hsgran.onplane.plane_segment."""
+    transition that ended the last one): MODEL §5.3 through hsgran.onplane.plane_segment. On a
+    cylinder (hsgran._cylinder), a sphere the surface does not press flies instead."""
+    if curved(walls, w):
+        if not enter_cylinder(i, w, t, snap, (0.0, 0.0, 0.0, 0.0), flight, dyn, walls, gravity,
+                              pair_table, fsc, friction, rolling, rotation):
+            leave_plane(i, flight, dyn, gravity, rotation)
+        return
     st, acc, mstate = flight.st, flight.acc, flight.mstate
     mplane, seg_end, seg_code = flight.mplane, flight.seg_end, flight.seg_code
     omg, mat, alpha, seg_dir = dyn.omg, dyn.mat, dyn.alpha, dyn.seg_dir
@@ -201,8 +209,18 @@ def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, fri
 def stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
                    rotation):
     """Sphere p, on its plane, stops there: at rest, or, on a slope too steep for rest, starting
-    a new segment from standstill."""
-    halt(p, flight.st, dyn.omg, rotation)
+    a new segment from standstill. On a turning cylinder it stops relative to the wall: it
+    turns with it, as one body."""
+    w = flight.mplane[p]
+    if turning(walls, w):
+        st = flight.st
+        vx, vy, vz = carried_velocity(st[p, 0], st[p, 1], st[p, 2], walls, w)
+        st[p, 3], st[p, 4], st[p, 5] = vx, vy, vz
+        if rotation:
+            for k in range(3):
+                dyn.omg[p, k] = walls.planes_cyl[w, CY_OMEGA] * walls.planes_cyl[w, CY_AXIS + k]
+    else:
+        halt(p, flight.st, dyn.omg, rotation)
     enter_plane(p, np.int64(flight.mplane[p]), t, np.int64(END_NONE), flight, dyn, walls, gravity,
                  pair_table, fsc, friction, rolling, rotation)
     flight.counter[p] += 1
@@ -216,9 +234,35 @@ def moving(walls, w):
 
 @njit(inline="always")
 def holds(walls, w):
-    """Whether spheres may land, rest, roll and be wedge-stopped on wall w: a fixed plane (on
-    a moving plane or a cylinder every rebound flies, docs/walls.md)."""
-    return walls.planes_kind[w] == WK_PLANE
+    """Whether spheres may land, rest, roll and slide on wall w: a fixed plane or a cylinder
+    (on a moving plane every rebound flies, docs/walls.md)."""
+    return walls.planes_kind[w] != WK_MOVING
+
+
+@njit(inline="always")
+def immovable(walls, w):
+    """Whether wall w neither moves nor turns: a fixed plane, or a cylinder at rest (a sphere
+    wedged against it may be stopped, hsgran._settling)."""
+    kind = walls.planes_kind[w]
+    return kind == WK_PLANE or (kind == WK_CYLINDER and walls.planes_cyl[w, CY_OMEGA] == 0.0)
+
+
+@njit(inline="always")
+def turning(walls, w):
+    """Whether wall w is a cylinder turning about its axis."""
+    return walls.planes_kind[w] == WK_CYLINDER and walls.planes_cyl[w, CY_OMEGA] != 0.0
+
+
+@njit(inline="always")
+def surface_speed2(p, flight, walls):
+    """Squared speed [m²/s²] of sphere p relative to the surface it is on: its own, but on a
+    turning cylinder relative to the wall's motion at its centre."""
+    st, w = flight.st, flight.mplane[p]
+    vx, vy, vz = st[p, 3], st[p, 4], st[p, 5]
+    if flight.mstate[p] != MS_FLIGHT and w >= 0 and turning(walls, w):
+        cx, cy, cz = carried_velocity(st[p, 0], st[p, 1], st[p, 2], walls, w)
+        vx, vy, vz = vx - cx, vy - cy, vz - cz
+    return vx * vx + vy * vy + vz * vz
 
 
 @njit(inline="always")
@@ -228,63 +272,22 @@ def curved(walls, w):
 
 
 @njit(inline="always")
-def axis_offset(x, y, z, walls, w):
-    """A point's offset [m] from cylinder w's axis, perpendicular to it, (qx, qy, qz)."""
-    cyl, p = walls.planes_cyl, walls.planes_p
-    dx = x - p[w, 0]
-    dy = y - p[w, 1]
-    dz = z - p[w, 2]
-    ax, ay, az = cyl[w, CY_AXIS], cyl[w, CY_AXIS + 1], cyl[w, CY_AXIS + 2]
-    s = dx * ax + dy * ay + dz * az
-    return dx - s * ax, dy - s * ay, dz - s * az
+def wall_normal(walls, w, x, y, z):
+    """Unit normal of wall w at its contact with a sphere centred at (x, y, z) [m], pointing
+    to the sphere: a plane's normal, or a cylinder's there."""
+    if curved(walls, w):
+        return cylinder_normal(x, y, z, walls, w)
+    return walls.planes_n[w, 0], walls.planes_n[w, 1], walls.planes_n[w, 2]
 
 
 @njit(inline="always")
-def across_axis(vx, vy, vz, walls, w):
-    """The part (vx, vy, vz) of a vector perpendicular to cylinder w's axis."""
-    cyl = walls.planes_cyl
-    ax, ay, az = cyl[w, CY_AXIS], cyl[w, CY_AXIS + 1], cyl[w, CY_AXIS + 2]
-    s = vx * ax + vy * ay + vz * az
-    return vx - s * ax, vy - s * ay, vz - s * az
-
-
-@njit(inline="always")
-def cylinder_gap(x, y, z, r, walls, w):
-    """Gap [m] between a sphere of radius r [m] at (x, y, z) [m] and cylinder w (negative:
-    overlap), and the distance of the centre from the axis [m]."""
-    qx, qy, qz = axis_offset(x, y, z, walls, w)
-    d = np.sqrt(qx * qx + qy * qy + qz * qz)
-    side = walls.planes_cyl[w, CY_SIDE]
-    return side * (walls.planes_cyl[w, CY_RADIUS] - d) - r, d
-
-
-@njit(inline="always")
-def set_cylinder_contact(walls, w, x, y, z, r):
-    """Store cylinder w's contact with the sphere of radius r [m] at (x, y, z) [m] in its row:
-    the normal towards the sphere in ``planes_n[w]``, the surface velocity Ω a × (c − p) at the
-    contact point c in ``planes_vel[w]`` [m/s], and Ω a in ``planes_omg[w]`` [rad/s] (what the
-    collision model reads of a wall). Returns False for a centre on the axis (no normal)."""
-    cyl = walls.planes_cyl
-    qx, qy, qz = axis_offset(x, y, z, walls, w)
-    d = np.sqrt(qx * qx + qy * qy + qz * qz)
-    if d == 0.0:
-        return False
-    side = cyl[w, CY_SIDE]  # inside, the normal points to the axis
-    nx, ny, nz = -side * qx / d, -side * qy / d, -side * qz / d
-    walls.planes_n[w, 0] = nx
-    walls.planes_n[w, 1] = ny
-    walls.planes_n[w, 2] = nz
-    om = cyl[w, CY_OMEGA]
-    ax, ay, az = cyl[w, CY_AXIS], cyl[w, CY_AXIS + 1], cyl[w, CY_AXIS + 2]
-    # the contact point's offset from the axis is R q/|q|
-    k = om * cyl[w, CY_RADIUS] / d
-    walls.planes_vel[w, 0] = k * (ay * qz - az * qy)
-    walls.planes_vel[w, 1] = k * (az * qx - ax * qz)
-    walls.planes_vel[w, 2] = k * (ax * qy - ay * qx)
-    walls.planes_omg[w, 0] = om * ax
-    walls.planes_omg[w, 1] = om * ay
-    walls.planes_omg[w, 2] = om * az
-    return True
+def wall_gap(i, w, st, walls):
+    """Gap [m] of sphere i to wall w, a fixed plane or a cylinder (whose row then describes
+    its contact with sphere i, for :func:`pressed`)."""
+    if curved(walls, w):
+        set_cylinder_contact(walls, w, st[i, 0], st[i, 1], st[i, 2])
+        return cylinder_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], walls, w)
+    return plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], walls.planes_p, walls.planes_n, w)
 
 
 @njit(inline="always")
@@ -303,6 +306,7 @@ def set_wall_velocity(walls, w, t):
     speed = wall_speed(walls.planes_mot, w, t)
     for k in range(3):
         walls.planes_vel[w, k] = speed * walls.planes_mot[w, M_DIR + k]
+
 
 
 @njit(inline="always")

@@ -34,6 +34,7 @@ import math
 import numpy as np
 
 from hsgran._cluster import CL_SOLVED, cluster_collision, cluster_resolve
+from hsgran._cylinder import enter_cylinder, set_cylinder_contact, track_before
 from hsgran._flight import (
     MAX_ZERO_TIME_EVENTS,
     PLANE_TOUCHING_REL,
@@ -43,16 +44,16 @@ from hsgran._flight import (
     curved,
     enter_plane,
     holds,
+    leave_plane,
     min_image,
     moving,
     moving_gap,
     note_progress,
-    plane_gap,
     pressed,
-    set_cylinder_contact,
     set_wall_velocity,
     state_at,
     tc_row,
+    wall_gap,
 )
 from hsgran._jit import njit, prefetch
 from hsgran._observe import (
@@ -190,15 +191,15 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
     grav_on = flags[FL_GRAVITY]
     no_end = np.int64(END_NONE)
     st = flight.st
-    planes_p, planes_n = walls.planes_p, walls.planes_n
+    planes_p = walls.planes_p
     if grav_on:
         # spheres that start on a plane (touching it, not moving away faster than the
         # landing speed, pressed on by gravity) start in an on-plane state
         for i in range(st.shape[0]):
             for w in range(planes_p.shape[0]):
                 if not holds(walls, w):
-                    continue  # no sphere rests on a moving plane or a cylinder
-                gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)
+                    continue  # no sphere rests on a moving plane
+                gap = wall_gap(i, w, st, walls)
                 gn, vn = pressed(i, w, st, walls, space.gravity)
                 if (abs(gap) <= START_GAP_REL * st[i, S_R] and gn > 0.0
                         and vn <= fsc[F_LANDING_SPEED] and flight.mstate[i] == MS_FLIGHT):
@@ -441,7 +442,7 @@ def _wall_handler(grav_on):
                 return GO_ON
             set_wall_velocity(walls, w, t)
         elif curved(walls, w):
-            set_cylinder_contact(walls, w, st[i, 0], st[i, 1], st[i, 2], st[i, S_R])
+            set_cylinder_contact(walls, w, st[i, 0], st[i, 1], st[i, 2])
         obs_on = observing(dyn)
         p_i = before_wall(i, t, flight, dyn, walls, space, grav_on) if obs_on else (0.0, 0.0, 0.0)
         if grav_on and flags[FL_CLUSTERS] and cluster_collision(
@@ -522,15 +523,25 @@ def _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out, pair_tabl
                                   ended):
             return STATUS_LOG_FULL
         return GO_ON
-    advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, rotation)
-    enter_plane(i, np.int64(mplane[i]), t, np.int64(ended), flight, dyn, walls, space.gravity,
-                pair_table, fsc, friction, rolling, rotation)
+    w = np.int64(mplane[i])
+    if curved(walls, w):
+        # a segment on a cylinder ends (hsgran._cylinder): on the surface again, with the
+        # speed along the track its accelerations gave; flies if no longer pressed on
+        prev = track_before(i, t, flight.acc, st, walls, w)
+        advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, rotation)
+        if not enter_cylinder(i, w, t, np.int64(ended), prev, flight, dyn, walls, space.gravity,
+                              pair_table, fsc, friction, rolling, rotation):
+            leave_plane(i, flight, dyn, space.gravity, rotation)
+    else:
+        advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, rotation)
+        enter_plane(i, w, t, np.int64(ended), flight, dyn, walls, space.gravity, pair_table,
+                    fsc, friction, rolling, rotation)
     flight.counter[i] += 1
     repredict_later(isc, i)
     counts[EV_STATE] += 1
     if _collapsed(isc, zstreak, i, -1):
         return STATUS_COLLAPSE
-    if flags[FL_LOG] and _log(out, isc, t, 0.0, 0.0, math.nan, EV_STATE, i, -1 - mplane[i],
+    if flags[FL_LOG] and _log(out, isc, t, 0.0, 0.0, math.nan, EV_STATE, i, -1 - w,
                               mstate[i], ended):
         return STATUS_LOG_FULL
     return GO_ON

@@ -29,7 +29,7 @@ flight, or in the opt-in cluster treatment) is booked to a last row, "unresolved
 
 from __future__ import annotations
 
-from hsgran._flight import min_image
+from hsgran._flight import min_image, wall_normal
 from hsgran._jit import njit
 from hsgran._state import OB_MOMENT, OB_N_PAIR, OB_N_WALL, OB_WALL, S_R, S_T, S_V
 from hsgran.onplane import MS_FLIGHT
@@ -96,8 +96,8 @@ def book_support(j, t, flight, dyn, walls, space):
     w = mplane[cur]
     if w >= 0:
         r = st[cur, S_R]
-        n = walls.planes_n
-        _add_moment(obs, r * n[w, 0], r * n[w, 1], r * n[w, 2], s0, s1, s2)
+        nx, ny, nz = wall_normal(walls, w, st[cur, 0], st[cur, 1], st[cur, 2])
+        _add_moment(obs, r * nx, r * ny, r * nz, s0, s1, s2)
     _add_to_wall(obs, w, s0, s1, s2)
 
 

@@ -9,11 +9,10 @@ pair event whose partner has moved on since is known to be stale (lazy invalidat
 
 from __future__ import annotations
 
+from hsgran._cylinder import across_axis, axis_offset
 from hsgran._flight import (
     PLANE_TOUCHING_REL,
     TOUCH_REL,
-    across_axis,
-    axis_offset,
     moving,
     moving_gap,
     plane_gap,

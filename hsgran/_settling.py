@@ -32,12 +32,15 @@ from hsgran._flight import (
     enter_plane,
     halt,
     holds,
+    immovable,
     leave_plane,
     min_image,
-    plane_gap,
     pressed,
     stop_on_plane,
+    surface_speed2,
     tc_row,
+    wall_gap,
+    wall_normal,
 )
 from hsgran._jit import njit
 from hsgran._observe import book_support, observing
@@ -194,7 +197,7 @@ def _wedge_stop(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, ro
 
 
 @njit(inline="always")
-def _both_slow_on_supports(i, j, st, mstate, v_land):
+def _both_slow_on_supports(i, j, flight, walls, v_land):
     """Whether spheres i and j are both on a support (a plane, or asleep on a sphere) and both
     slower than the landing speed ``v_land`` [m/s]. When such spheres meet they both stop
     where they are (on a steep incline the plane then sets them moving again) [OURS]: the
@@ -202,11 +205,11 @@ def _both_slow_on_supports(i, j, st, mstate, v_land):
     stopped. As a collision, a slow sphere sliding into a resting one that had just taken a
     sleeper made a zero-time chain: the collision moved the support, the sleeper stopped it
     again, and the slider met it again, ever slower."""
-    if mstate[i] == MS_FLIGHT or mstate[j] == MS_FLIGHT:
+    if flight.mstate[i] == MS_FLIGHT or flight.mstate[j] == MS_FLIGHT:
         return False
-    vi2 = st[i, 3] * st[i, 3] + st[i, 4] * st[i, 4] + st[i, 5] * st[i, 5]
-    vj2 = st[j, 3] * st[j, 3] + st[j, 4] * st[j, 4] + st[j, 5] * st[j, 5]
-    return vi2 <= v_land * v_land and vj2 <= v_land * v_land
+    # (relative to the surface: on a turning drum, to its motion)
+    return (surface_speed2(i, flight, walls) <= v_land * v_land
+            and surface_speed2(j, flight, walls) <= v_land * v_land)
 
 
 @njit
@@ -279,14 +282,15 @@ SUPPORT_EPS = 1e-9
 
 
 @njit(inline="always")
-def _support_normal(p, st, mstate, mplane, planes_n, box_len, periodic):
-    """Unit normal N [-] of what backs sphere p: its plane's normal, or, for a sphere asleep on
-    sphere b, the direction from b to p; (0, 0, 0) for a sphere in flight."""
+def _support_normal(p, st, mstate, mplane, walls, box_len, periodic):
+    """Unit normal N [-] of what backs sphere p: its wall's normal (a cylinder's where p
+    touches it), or, for a sphere asleep on sphere b, the direction from b to p; (0, 0, 0) for
+    a sphere in flight."""
     if mstate[p] == MS_FLIGHT:
         return 0.0, 0.0, 0.0
     w = mplane[p]
     if w >= 0:
-        return planes_n[w, 0], planes_n[w, 1], planes_n[w, 2]
+        return wall_normal(walls, w, st[p, 0], st[p, 1], st[p, 2])
     b = -2 - w
     if b < 0:
         return 0.0, 0.0, 0.0
@@ -411,11 +415,10 @@ def _resting_plane(i, st, walls, gravity, v_land):
     given up is at most v_land) [OURS]. A sphere wedged between neighbours on a plane and
     hopped off them, slightly upwards, would otherwise meet them again and again before it
     ever came back to the plane."""
-    planes_p, planes_n = walls.planes_p, walls.planes_n
-    for w in range(planes_p.shape[0]):
+    for w in range(walls.planes_p.shape[0]):
         if not holds(walls, w):
-            continue  # no sphere rests on a moving plane or a cylinder
-        gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)
+            continue  # no sphere rests on a moving plane
+        gap = wall_gap(i, w, st, walls)
         if gap <= PLANE_TOUCHING_REL * st[i, S_R]:
             gn, vn = pressed(i, w, st, walls, gravity)
             if gn > 0.0 and abs(vn) <= v_land:
@@ -472,7 +475,7 @@ def settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity, pair_table, fsc, fr
             _fall_asleep(sleeper, other, flight, dyn, rotation)
             counter[sleeper] += 1
             return SETTLE_SLEEP, sleeper, other
-    if _both_slow_on_supports(i, j, st, mstate, v_land):
+    if _both_slow_on_supports(i, j, flight, walls, v_land):
         for p in (i, j):
             if mstate[p] != MS_REST:
                 stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
@@ -520,7 +523,6 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
     st, mstate, mplane = flight.st, flight.mstate, flight.mplane
     omg, inv_m, inv_i, mat, zstreak = dyn.omg, dyn.inv_m, dyn.inv_i, dyn.mat, dyn.zstreak
     gravity, box_len, periodic = space.gravity, space.box_len, space.periodic
-    planes_n = walls.planes_n
     wedged_a = wedged_b = -1
     rest_i = mstate[i] == MS_REST
     rest_j = mstate[j] == MS_REST
@@ -529,8 +531,8 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
     ri = st[i, S_R]
     rj = st[j, S_R]
     # a sphere on a plane that the impulse presses into the plane is backed by it
-    bix, biy, biz = _support_normal(i, st, mstate, mplane, planes_n, box_len, periodic)
-    bjx, bjy, bjz = _support_normal(j, st, mstate, mplane, planes_n, box_len, periodic)
+    bix, biy, biz = _support_normal(i, st, mstate, mplane, walls, box_len, periodic)
+    bjx, bjy, bjz = _support_normal(j, st, mstate, mplane, walls, box_len, periodic)
     ci = _support_cos(nx, ny, nz, bix, biy, biz)
     cj = _support_cos(-nx, -ny, -nz, bjx, bjy, bjz)
     if ci * ci + cj * cj >= 2.0 - SUPPORT_EPS:
@@ -676,21 +678,23 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     ri = st[i, S_R]
     ci = -1.0
     pw = -1
+    pnx = pny = pnz = 0.0  # the normal of the wall sphere i is on
     if mstate[i] != MS_FLIGHT and mplane[i] >= 0:
         # on another plane (a sphere sliding into a side wall): backed by that plane as in the
         # pair case, unless the wall pulls it off (or squeezes it head-on)
         pw = mplane[i]
-        ci = -(planes_n[w, 0] * planes_n[pw, 0] + planes_n[w, 1] * planes_n[pw, 1]
-               + planes_n[w, 2] * planes_n[pw, 2])
+        pnx, pny, pnz = wall_normal(walls, pw, st[i, 0], st[i, 1], st[i, 2])
+        ci = -(planes_n[w, 0] * pnx + planes_n[w, 1] * pny + planes_n[w, 2] * pnz)
         if ci < 0.0 or ci * ci >= 1.0 - SUPPORT_EPS:
             ci = -1.0
     vi0x, vi0y, vi0z = st[i, 3], st[i, 4], st[i, 5]
     inv_mi = inv_m[i] * (1.0 - ci * ci) if ci >= 0.0 else inv_m[i]
     row, tc_on = tc_row(pair_table[dyn.mat[i], planes_mat[w]], t, dyn.t_last[i], -NEVER, fsc,
                         dyn.row_tc)
-    # a moving plane or a cylinder: its velocity and normal at t are in planes_vel[w],
-    # planes_n[w] (the wall handler), and it holds no sphere
-    driven = not holds(walls, w)
+    # a moving plane's or a cylinder's velocity and normal at t are in planes_vel[w],
+    # planes_n[w] (the wall handler); a moving plane holds no sphere, and no sphere is
+    # wedge-stopped against a wall that moves or turns
+    driven = not immovable(walls, w)
     hit = resolve(st[i, S_V:S_V + 3], wi, walls.planes_vel[w], walls.planes_omg[w],
                   planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0, dyn.inv_i[i],
                   0.0, ri, 0.0, 1.0 / ri, row, rec, plasticity, friction, rolling, adhesion,
@@ -698,7 +702,7 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     if hit and ci >= 0.0:
         _backed_velocity(i, vi0x, vi0y, vi0z, (st[i, 3] - vi0x) / inv_mi,
                          (st[i, 4] - vi0y) / inv_mi, (st[i, 5] - vi0z) / inv_mi,
-                         planes_n[pw, 0], planes_n[pw, 1], planes_n[pw, 2], st, inv_m)
+                         pnx, pny, pnz, st, inv_m)
     if not hit:
         return False, tc_on, False, False
     landed = False
@@ -709,7 +713,7 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
         if mstate[i] != MS_FLIGHT:
             leave_plane(i, flight, dyn, gravity, rotation)  # knocked off its plane
         gn, vn = pressed(i, w, st, walls, gravity)
-        if gn > 0.0 and vn <= fsc[F_LANDING_SPEED] and not driven:
+        if gn > 0.0 and vn <= fsc[F_LANDING_SPEED] and holds(walls, w):
             enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
                         rolling, rotation)
             landed = True

@@ -231,7 +231,10 @@ def _sliding(v, w, nx, ny, nz, gn, gtx, gty, gtz, ex, ey, ez, us, radius, k, mu_
     # du/dt = a − R α × n, followed along û
     cx, cy, cz = _cross(alx, aly, alz, nx, ny, nz)
     slip_rate = (ax - radius * cx) * ex + (ay - radius * cy) * ey + (az - radius * cz) * ez
-    t_slip = us / -slip_rate if slip_rate < 0.0 else NEVER
+    # (a slip starting from zero because friction cannot keep the sphere rolling grows: a
+    # rate below zero then is the rounding of a pull at the limit of friction, and ending the
+    # segment at once would snap it to rolling and back here at the same instant, for ever)
+    t_slip = us / -slip_rate if slip_rate < 0.0 and us > 0.0 else NEVER
     if t_spin < t_slip:
         sdir[0] = ox
         sdir[1] = oy

@@ -6,11 +6,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy.integrate import solve_ivp
+from scipy.special import ellipk
 
 from hsgran.engine import Simulation
 from hsgran.errors import InputError
-from hsgran.events.kinds import EV_WALL
+from hsgran.events.kinds import EV_LAND, EV_WALL
 from hsgran.motion import cylinder_contact_time
+from hsgran.onplane import MS_FLIGHT, MS_REST, MS_ROLLING
 from hsgran.scene import parse_scene
 from tests.observers import Keep
 
@@ -29,8 +32,11 @@ def run(text, **kw):
     sim = Simulation(scene, log_events=True)
     keep = Keep()
     sim.run(observers=[keep], **kw)
-    frames = {name: keep.cat(name) for name in ("time", "position", "velocity")}
-    log = {name: keep.log(name) for name in ("time", "kind", "i", "j")}
+    frames = {name: keep.cat(name) for name in ("time", "position", "velocity",
+                                                 "angular_velocity", "motion_state")
+              if getattr(keep.frames[0], name) is not None}
+    log = {name: keep.log(name) if keep.events else np.zeros(0)
+           for name in ("time", "kind", "i", "j")}
     return scene, frames, log
 
 
@@ -274,3 +280,159 @@ def test_cylinders_in_files_and_exported_drawings(tmp_path):
     n = np.asarray(drawn.cell_data["normal"])[tube]
     radial = centres[tube] * [1.0, 0.0, 1.0]
     assert np.all(np.einsum("ij,ij->i", n, radial) < 0.0)
+
+
+# ---- on a cylinder: rolling, resting, carried round (docs/walls.md, "On a cylinder") ---------
+
+ON = """
+[scene]
+name = "on a cylinder"
+duration = {duration}
+effects = ["gravity", "rotation", "friction"{more}]
+[output]
+frame_interval = {dt}
+[[walls]]
+kind = "cylinder"
+center = [0.0, 0.0, 0.0]
+axis = [0.0, 1.0, 0.0]
+radius = 0.05
+length = 0.01
+side = "{side}"
+angular_velocity = {omega}
+material = "steel"
+[[particles]]
+material = "steel"
+radius = 0.002
+position = [{x!r}, 0.0, {z!r}]
+velocity = [{u!r}, 0.0, {w!r}]
+angular_velocity = [0.0, {spin!r}, 0.0]
+[[contacts]]
+between = ["steel", "steel"]
+sliding_friction = {mu}
+{extra}
+"""
+G = 9.81  #: [m/s²] (the default gravity)
+K = 0.4  #: I/(m r²) of a solid sphere
+RHO = 0.05 - 0.002  #: the centre's distance from the axis inside the drum [m]
+
+
+def on(duration=2.0, dt=0.001, more="", side="inside", omega=0.0, phi=0.0, rho=RHO, u=0.0,
+       w=0.0, spin=0.0, mu=0.3, extra=""):
+    """An ON scene with the sphere at angle phi [rad] from the bottom (inside; from the top
+    outside), touching."""
+    x = float(rho * np.sin(phi))
+    z = float(-rho * np.cos(phi) if side == "inside" else rho * np.cos(phi))
+    return ON.format(duration=duration, dt=dt, more=more, side=side, omega=omega, x=x, z=z, u=u,
+                     w=w, spin=spin, mu=mu, extra=extra)
+
+
+def angle(frames, side="inside"):
+    """The sphere's angle from the bottom (inside) or the top (outside) in every frame [rad]."""
+    x = frames["position"][:, 0]
+    return np.arctan2(x[:, 0], -x[:, 2] if side == "inside" else x[:, 2])
+
+
+def crossings(t, y):
+    """Times [s] at which y passes zero (linear interpolation between frames)."""
+    k = np.flatnonzero(np.sign(y[1:]) != np.sign(y[:-1]))
+    return t[k] - y[k] * (t[k + 1] - t[k]) / (y[k + 1] - y[k])
+
+
+@pytest.mark.parametrize("amplitude", [0.02, 0.3])
+def test_a_sphere_rolling_in_a_cylinder_is_a_pendulum(amplitude):
+    """Released at rest at an angle φ₀, it rolls (friction holds it: tan φ₀ < 7/2 μ) with the
+    period of a pendulum of length ρ = R − r and g/(1 + k): T = 4 K(sin²(φ₀/2)) / ω₀,
+    ω₀ = √(5 g / 7 ρ) (Landau & Lifshitz, Mechanics §11), keeping its energy and the surface."""
+    scene, frames, _ = run(on(duration=3.0, dt=0.0005, phi=amplitude))
+    assert set(np.unique(frames["motion_state"])) == {MS_ROLLING}  # throughout
+    phi = angle(frames)
+    period = 2.0 * np.mean(np.diff(crossings(frames["time"], phi)))
+    omega0 = np.sqrt(G / ((1.0 + K) * RHO))
+    exact = 4.0 * ellipk(np.sin(amplitude / 2.0) ** 2) / omega0
+    assert period == pytest.approx(exact, rel=1e-6)
+    if amplitude < 0.05:  # the small-amplitude closed form, to its own O(φ₀²/16)
+        assert period == pytest.approx(2.0 * np.pi / omega0, rel=amplitude**2 / 8)
+    m = scene.mass()[0]
+    v = frames["velocity"][:, 0]
+    spin = frames["angular_velocity"][:, 0]
+    e = (0.5 * m * (v * v).sum(1) + 0.5 * K * m * 0.002**2 * (spin * spin).sum(1)
+         + m * G * frames["position"][:, 0, 2])
+    # within a segment the parabola's speed errs by O(CURVE_STEP²); across them nothing drifts
+    scale = m * G * RHO * (1.0 - np.cos(amplitude))
+    assert np.ptp(e) < 1e-5 * scale
+    assert abs(e[-1000:].mean() - e[:1000].mean()) < 1e-6 * scale
+    d = np.hypot(frames["position"][:, 0, 0], frames["position"][:, 0, 2])
+    assert d.max() <= RHO * (1.0 + 1e-15)  # never into the wall
+    assert d.min() > RHO * (1.0 - 1e-9)  # and on it but for the segments' chords
+
+
+MU_R = 0.05  #: rolling friction of the turning-drum tests [-]
+OMEGA = 2.0  #: the drum's angular velocity [rad/s]
+
+
+def drum_oracle(t, phi0, dphi0):
+    """φ(t) of a sphere rolling in the drum turning at OMEGA (faster than the sphere moves on
+    it, so the rolling resistance always points along the surface's motion): (1 + k) ρ φ'' =
+    −g sin φ − μ_r (g cos φ + ρ φ'²) (MODEL §5.3 in the tangent plane, the load with the
+    centripetal term), by scipy's DOP853 to 1e-12."""
+    def rhs(_, y):
+        phi, dphi = y
+        return [dphi, -(G * np.sin(phi) + MU_R * (G * np.cos(phi) + RHO * dphi**2))
+                / ((1.0 + K) * RHO)]
+
+    sol = solve_ivp(rhs, (0.0, t[-1]), [phi0, dphi0], method="DOP853", t_eval=t, rtol=1e-12,
+                    atol=1e-14)
+    return sol.y[0]
+
+
+def test_a_sphere_in_a_turning_drum_rolls_about_the_steady_angle():
+    """Rolling in place at the bottom of a drum turning at Ω (spin Ω R / r: no slip), the
+    sphere is carried up and rocks about the angle where the rolling resistance balances
+    gravity, tan φ_s = μ_r (against the surface's motion: φ_s = −atan μ_r here), following
+    the equation of motion's solution; placed at φ_s, it stays there."""
+    rolling = f"rolling_friction = {MU_R}"
+    spin = OMEGA * 0.05 / 0.002
+    _, frames, _ = run(on(duration=2.0, more=', "rolling_resistance"', omega=OMEGA,
+                          spin=spin, extra=rolling))
+    phi = angle(frames)
+    np.testing.assert_allclose(phi, drum_oracle(frames["time"], 0.0, 0.0), atol=2e-6)
+    steady = -np.arctan(MU_R)
+    assert phi.min() < steady < phi.max()
+    assert set(np.unique(frames["motion_state"])) == {MS_ROLLING}
+    _, frames, log = run(on(duration=2.0, more=', "rolling_resistance"', omega=OMEGA,
+                            phi=steady, spin=spin, extra=rolling))
+    assert np.abs(angle(frames) - steady).max() < 1e-12
+    assert log["time"].size == 0  # no event at all: the steady state is one segment
+
+
+def test_a_sphere_rolls_off_a_post_where_its_load_vanishes():
+    """Released near the top of a horizontal post with friction enough to roll (μ = 100), it
+    rolls down and flies off where the surface no longer presses it: cos θ = 10/17 cos θ₀
+    (energy with I = 2/5 m r², and the centripetal load m v²/ρ = m g cos θ)."""
+    rho = 0.05 + 0.002
+    theta0 = 0.01
+    _, frames, _ = run(on(duration=0.6, dt=0.0002, side="outside", rho=rho, phi=theta0,
+                          mu=100.0))
+    theta = angle(frames, "outside")
+    states = frames["motion_state"][:, 0]
+    first = np.flatnonzero(states == MS_FLIGHT)[0]
+    assert np.all(states[:first] == MS_ROLLING)
+    leave = np.arccos(10.0 / 17.0 * np.cos(theta0))
+    assert theta[first - 1] <= leave <= theta[first] + 1e-9
+
+
+def test_a_ball_dropped_into_a_drum_lands_rolls_and_comes_to_rest():
+    """With restitution 0.5 the bounces die out, the ball lands on the drum and rolls; rolling
+    resistance stops it within |φ| ≤ atan μ_r, and then nothing happens any more."""
+    text = on(duration=6.0, dt=0.01, more=', "rolling_resistance"', phi=0.2, rho=0.03,
+              u=0.2, extra=f"restitution = 0.5\nrolling_friction = {MU_R}")
+    scene, frames, log = run(text)
+    assert np.count_nonzero(log["kind"] == EV_LAND) >= 1
+    states = frames["motion_state"][:, 0]
+    assert states[-1] == MS_REST
+    rest = np.flatnonzero(states == MS_REST)[0]
+    assert np.all(states[rest:] == MS_REST)
+    assert abs(angle(frames)[-1]) <= np.arctan(MU_R) + 1e-12
+    assert log["time"][-1] <= frames["time"][rest]
+    gaps = scene.cylinders[0].distance(frames["position"]) - scene.radius
+    assert gaps.min() > -OVERLAP_TOL

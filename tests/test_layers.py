@@ -25,6 +25,7 @@ LAYERS = {
     "_settling": 5,
     "_cluster": 5,
     "_observe": 5,
+    "_cylinder": 5,
     "contact.": 2,
     "motion": 2,
     "wallmotion": 2,
