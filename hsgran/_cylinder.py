@@ -287,7 +287,7 @@ def _segment(i, w, t, snap, rho, c, side, e, n, flight, dyn, walls, gravity, pai
     wv = omg[i] if rotation else omg[0]
     state, a_x, a_y, a_z, alx, aly, alz, dur, code = plane_segment(
         st[i, 3:6], wv, walls.planes_n[w], (gx, gy, gz), st[i, S_R], SOLID_SPHERE_INERTIA,
-        mu_s, mu_r, fsc[F_CHI], snap, dyn.seg_dir[i])
+        mu_s, mu_r, fsc[F_CHI], snap, dyn.seg_dir[i], abs(carried) + abs(om) * st[i, S_R])
     for k in range(3):
         st[i, 3 + k] += carried * e[k]
     if rotation:

@@ -78,7 +78,7 @@ def _cross(ax, ay, az, bx, by, bz):
 
 
 @njit
-def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir):
+def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, speed_floor=0.0):
     """The motion segment of a sphere on a plane from its current state.
 
     Args:
@@ -94,6 +94,8 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir):
         snap: The transition that just ended the previous segment (``END_*``): its quantity is
             set to exactly zero first, so the closed form is followed without drift.
         sdir: (3,) direction of the previous segment (for ``snap``); receives the new one.
+        speed_floor: Added to the speed scale of the rolling test [m/s]: velocities relative to
+            a moving surface carry the rounding of the surface's speed (hsgran._cylinder).
 
     Returns:
         (state, ax, ay, az, alx, aly, alz, duration [s], end code).
@@ -137,7 +139,7 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir):
     us = math.sqrt(ux * ux + uy * uy + uz * uz)
     vs = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     ws = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-    scale = vs + radius * ws
+    scale = vs + radius * ws + speed_floor
     if mu_s <= 0.0:
         # frictionless: the sphere glides under the tangential pull, its spin unchanged
         if vs == 0.0 and gtx == 0.0 and gty == 0.0 and gtz == 0.0:
