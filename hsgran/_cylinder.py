@@ -36,11 +36,11 @@ from hsgran.motion import NEVER
 from hsgran.onplane import END_NONE, END_SLIP, MS_REST, MS_ROLLING, plane_segment
 from hsgran.wallspec import CY_AXIS, CY_OMEGA, CY_RADIUS, CY_SIDE
 
-#: A segment on a cylinder turns at most this angle about the axis [rad]. Its accelerations are
-#: those of its start, so it errs by O(CURVE_STEP²) of the speed within it, which the
-#: velocity-Verlet end removes but for a phase error: a rolling pendulum's period comes out
-#: (CURVE_STEP/amplitude)²/… short, 2e-7 relative at 0.3 rad (tests/test_cylinders.py), at
-#: ~4 segments per degree turned.
+#: A segment on a cylinder turns at most this angle about the axis [rad], and lasts at most
+#: this share of √(ρ/|g|). Its accelerations are those of its start, so it errs by
+#: O(CURVE_STEP²) of the speed within it, which the velocity-Verlet end removes but for a
+#: phase error: a rolling pendulum's period comes out within 1.3e-7 at 0.3 rad
+#: (tests/test_cylinders.py), at ~9 segments per degree turned and ≥ 3000 per period.
 CURVE_STEP = 2e-3
 #: Relative margin of a segment's acceleration towards the axis beyond the bound that keeps
 #: its parabola off the wall (_normal_acceleration): rounding of the bound's terms, ~1e-16, is

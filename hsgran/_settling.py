@@ -29,6 +29,7 @@ from hsgran._flight import (
     PLANE_TOUCHING_REL,
     advance,
     approaching,
+    curved,
     enter_plane,
     halt,
     holds,
@@ -207,6 +208,13 @@ def _both_slow_on_supports(i, j, flight, walls, v_land):
     again, and the slider met it again, ever slower."""
     if flight.mstate[i] == MS_FLIGHT or flight.mstate[j] == MS_FLIGHT:
         return False
+    # Not on a cylinder: stopped at two places of a curved wall, the spheres are pulled
+    # together at once (their accelerations differ), met again at the same instant and were
+    # stopped again, for ever (seen in drums of 48 and 62 beads); there they collide.
+    for p in (i, j):
+        w = flight.mplane[p]
+        if w >= 0 and curved(walls, w):
+            return False
     # (relative to the surface: on a turning drum, to its motion)
     return (surface_speed2(i, flight, walls) <= v_land * v_land
             and surface_speed2(j, flight, walls) <= v_land * v_land)
