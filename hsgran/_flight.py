@@ -308,7 +308,6 @@ def set_wall_velocity(walls, w, t):
         walls.planes_vel[w, k] = speed * walls.planes_mot[w, M_DIR + k]
 
 
-
 @njit(inline="always")
 def plane_gap(x, y, z, r, planes_p, planes_n, w):
     """Gap [m] between a sphere of radius r [m] centred at (x, y, z) [m] and plane w (negative:
