@@ -146,6 +146,17 @@ def carried_velocity(x, y, z, walls, w):
 
 
 @njit(inline="always")
+def carry_round(p, st, omg, walls, w, rotation):
+    """Sphere p turns with cylinder w as one body: its velocity is the wall's motion at its
+    centre and its spin (with ``rotation``) the wall's Ω a."""
+    vx, vy, vz = carried_velocity(st[p, 0], st[p, 1], st[p, 2], walls, w)
+    st[p, 3], st[p, 4], st[p, 5] = vx, vy, vz
+    if rotation:
+        for k in range(3):
+            omg[p, k] = walls.planes_cyl[w, CY_OMEGA] * walls.planes_cyl[w, CY_AXIS + k]
+
+
+@njit(inline="always")
 def cylinder_load(x, y, z, vx, vy, vz, gravity, walls, w):
     """Normal load per unit mass [m/s²] of a sphere centred at (x, y, z) [m] moving at
     (vx, vy, vz) [m/s] on cylinder w: −g·n plus the centripetal acceleration c²/ρ inside (the

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from hsgran._cylinder import (
-    carried_velocity,
+    carry_round,
     cylinder_gap,
     cylinder_load,
     cylinder_normal,
@@ -28,7 +28,7 @@ from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, approach_noise, flight_position
 from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
 from hsgran.wallmotion import wall_shift, wall_speed
-from hsgran.wallspec import CY_AXIS, CY_OMEGA, M_DIR, WK_CYLINDER, WK_MOVING, WK_PLANE
+from hsgran.wallspec import CY_OMEGA, M_DIR, WK_CYLINDER, WK_MOVING, WK_PLANE
 
 #: A sphere whose gap to a plane is within this fraction of its radius counts as touching it
 #: [-]: a gap of 1e-10 R is far above the rounding of a position dotted with a normal (~1e-16 of
@@ -213,12 +213,7 @@ def stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, 
     turns with it, as one body."""
     w = flight.mplane[p]
     if turning(walls, w):
-        st = flight.st
-        vx, vy, vz = carried_velocity(st[p, 0], st[p, 1], st[p, 2], walls, w)
-        st[p, 3], st[p, 4], st[p, 5] = vx, vy, vz
-        if rotation:
-            for k in range(3):
-                dyn.omg[p, k] = walls.planes_cyl[w, CY_OMEGA] * walls.planes_cyl[w, CY_AXIS + k]
+        carry_round(p, flight.st, dyn.omg, walls, w, rotation)
     else:
         halt(p, flight.st, dyn.omg, rotation)
     enter_plane(p, np.int64(flight.mplane[p]), t, np.int64(END_NONE), flight, dyn, walls, gravity,
@@ -243,26 +238,13 @@ def holds(walls, w):
 def immovable(walls, w):
     """Whether wall w neither moves nor turns: a fixed plane, or a cylinder at rest (a sphere
     wedged against it may be stopped, hsgran._settling)."""
-    kind = walls.planes_kind[w]
-    return kind == WK_PLANE or (kind == WK_CYLINDER and walls.planes_cyl[w, CY_OMEGA] == 0.0)
+    return walls.planes_kind[w] == WK_PLANE or (curved(walls, w) and not turning(walls, w))
 
 
 @njit(inline="always")
 def turning(walls, w):
     """Whether wall w is a cylinder turning about its axis."""
     return walls.planes_kind[w] == WK_CYLINDER and walls.planes_cyl[w, CY_OMEGA] != 0.0
-
-
-@njit(inline="always")
-def surface_speed2(p, flight, walls):
-    """Squared speed [m²/s²] of sphere p relative to the surface it is on: its own, but on a
-    turning cylinder relative to the wall's motion at its centre."""
-    st, w = flight.st, flight.mplane[p]
-    vx, vy, vz = st[p, 3], st[p, 4], st[p, 5]
-    if flight.mstate[p] != MS_FLIGHT and w >= 0 and turning(walls, w):
-        cx, cy, cz = carried_velocity(st[p, 0], st[p, 1], st[p, 2], walls, w)
-        vx, vy, vz = vx - cx, vy - cy, vz - cz
-    return vx * vx + vy * vy + vz * vz
 
 
 @njit(inline="always")

@@ -38,7 +38,6 @@ from hsgran._flight import (
     min_image,
     pressed,
     stop_on_plane,
-    surface_speed2,
     tc_row,
     wall_gap,
     wall_normal,
@@ -215,9 +214,10 @@ def _both_slow_on_supports(i, j, flight, walls, v_land):
         w = flight.mplane[p]
         if w >= 0 and curved(walls, w):
             return False
-    # (relative to the surface: on a turning drum, to its motion)
-    return (surface_speed2(i, flight, walls) <= v_land * v_land
-            and surface_speed2(j, flight, walls) <= v_land * v_land)
+    st = flight.st
+    vi2 = st[i, 3] * st[i, 3] + st[i, 4] * st[i, 4] + st[i, 5] * st[i, 5]
+    vj2 = st[j, 3] * st[j, 3] + st[j, 4] * st[j, 4] + st[j, 5] * st[j, 5]
+    return vi2 <= v_land * v_land and vj2 <= v_land * v_land
 
 
 @njit
@@ -653,7 +653,7 @@ def lands_before_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, fla
     hsgran.scene). It is then put on the plane."""
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
     if not holds(walls, w):
-        return False  # no sphere rests on a moving plane or a cylinder
+        return False  # no sphere rests on a moving plane
     gn, vn = pressed(i, w, flight.st, walls, gravity)
     if not (gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]):
         return False

@@ -412,14 +412,13 @@ def cylinder_contact_time(qx, qy, qz, ux, uy, uz, gx, gy, gz, rho, side, horizon
             return 0.0
     if c4 == 0.0:
         # no acceleration across the axis: |q + uτ| = ρ, a quadratic a τ² + 2 b τ + c = 0
+        if side < 0.0:
+            return pair_contact_before(qx, qy, qz, ux, uy, uz, rho, horizon, v_sum, x_sum)
         a = ux * ux + uy * uy + uz * uz
         if a == 0.0:
             return NEVER
         b = qx * ux + qy * uy + qz * uz
-        c = qx * qx + qy * qy + qz * qz - s2
-        if side < 0.0:
-            return pair_contact_before(qx, qy, qz, ux, uy, uz, rho, horizon, v_sum, x_sum)
-        c = min(c, 0.0)
+        c = min(qx * qx + qy * qy + qz * qz - s2, 0.0)
         s = math.sqrt(b * b - a * c)
         tau = -c / (b + s) if b >= 0.0 else (s - b) / a
         if touching and tau <= 0.0:

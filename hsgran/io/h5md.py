@@ -241,13 +241,14 @@ class Walls:
         ``center`` and ``row()`` in their place (:class:`hsgran.scene.Cylinder`)."""
         walls = list(walls)
         point, normal, motion, cylinder = [], [], [], []
+        has_cyl = False
         for w in walls:
             is_cyl = hasattr(w, "row")
+            has_cyl |= is_cyl
             point.append(w.center if is_cyl else w.point)
             normal.append(np.zeros(3) if is_cyl else w.normal)
             motion.append(np.zeros(M_SIZE) if is_cyl or w.motion is None else w.motion)
             cylinder.append(w.row() if is_cyl else np.zeros(CY_SIZE))
-        has_cyl = any(hasattr(w, "row") for w in walls)
         return cls(point=np.array(point, dtype=np.float64).reshape(-1, 3),
                    normal=np.array(normal, dtype=np.float64).reshape(-1, 3),
                    material=np.array([w.material for w in walls], dtype=np.int32),
