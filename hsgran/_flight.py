@@ -23,6 +23,13 @@ from hsgran._cylinder import (
     set_cylinder_contact,
 )
 from hsgran._jit import njit
+from hsgran._riding import (
+    carry_along,
+    enter_ride,
+    relative_normal_speed,
+    ride_load,
+    takeoff_delay,
+)
 from hsgran._state import F_CHI, F_TC_TIME, S_R, S_T, S_V
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, approach_noise, flight_position
@@ -121,10 +128,14 @@ def note_progress(p, t, st, zstreak):
 
 
 @njit(inline="always")
-def pressed(i, w, st, walls, gravity):
+def pressed(i, w, t, st, walls, gravity):
     """(normal load per unit mass g_n = −g·n [m/s²], normal velocity v·n [m/s]) of sphere i
-    against plane w."""
+    against wall w at time t [s]; against a moving plane, the load in its frame and the
+    velocity relative to it (hsgran._riding)."""
     planes_n = walls.planes_n
+    if moving(walls, w):
+        return (ride_load(gravity, walls, w, t),
+                relative_normal_speed(st[i, 3], st[i, 4], st[i, 5], walls, w, t))
     vn = st[i, 3] * planes_n[w, 0] + st[i, 4] * planes_n[w, 1] + st[i, 5] * planes_n[w, 2]
     if curved(walls, w):  # its row describes the contact with sphere i (wall_gap)
         return cylinder_load(st[i, 0], st[i, 1], st[i, 2], st[i, 3], st[i, 4], st[i, 5],
@@ -162,7 +173,13 @@ def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, fri
                  rotation):
     """Put sphere i on plane w at time t (or start its next segment there; ``snap`` is the
     transition that ended the last one): MODEL §5.3 through hsgran.onplane.plane_segment. On a
-    cylinder (hsgran._cylinder), a sphere the surface does not press flies instead."""
+    cylinder (hsgran._cylinder) or a moving plane (hsgran._riding), a sphere the surface does
+    not press flies instead."""
+    if moving(walls, w):
+        if not enter_ride(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                          rolling, rotation):
+            leave_plane(i, flight, dyn, gravity, rotation)
+        return
     if curved(walls, w):
         if not enter_cylinder(i, w, t, snap, (0.0, 0.0, 0.0, 0.0), flight, dyn, walls, gravity,
                               pair_table, fsc, friction, rolling, rotation):
@@ -209,11 +226,13 @@ def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, fri
 def stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
                    rotation):
     """Sphere p, on its plane, stops there: at rest, or, on a slope too steep for rest, starting
-    a new segment from standstill. On a turning cylinder it stops relative to the wall: it
-    turns with it, as one body."""
+    a new segment from standstill. On a turning cylinder or a moving plane it stops relative
+    to the wall: it moves with it, as one body."""
     w = flight.mplane[p]
     if turning(walls, w):
         carry_round(p, flight.st, dyn.omg, walls, w, rotation)
+    elif moving(walls, w):
+        carry_along(p, t, flight.st, dyn.omg, walls, w, rotation)
     else:
         halt(p, flight.st, dyn.omg, rotation)
     enter_plane(p, np.int64(flight.mplane[p]), t, np.int64(END_NONE), flight, dyn, walls, gravity,
@@ -228,10 +247,10 @@ def moving(walls, w):
 
 
 @njit(inline="always")
-def holds(walls, w):
-    """Whether spheres may land, rest, roll and slide on wall w: a fixed plane or a cylinder
-    (on a moving plane every rebound flies, docs/walls.md)."""
-    return walls.planes_kind[w] != WK_MOVING
+def holds_now(walls, w, t, gravity):
+    """Whether wall w can hold a sphere that lands on it at time t [s]: any wall but a moving
+    plane that pulls away from its spheres then (hsgran._riding)."""
+    return not moving(walls, w) or takeoff_delay(gravity, walls, w, t) > 0.0
 
 
 @njit(inline="always")

@@ -43,7 +43,6 @@ from hsgran._flight import (
     approaching,
     curved,
     enter_plane,
-    holds,
     leave_plane,
     min_image,
     moving,
@@ -65,6 +64,7 @@ from hsgran._observe import (
     observing,
 )
 from hsgran._predict import predict, predict_fn, prefetch_cells, repredict_later
+from hsgran._riding import END_TAKEOFF, leave_ride
 from hsgran._settling import (
     SETTLE_NONE,
     SETTLE_SLEEP,
@@ -193,14 +193,13 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
     st = flight.st
     planes_p = walls.planes_p
     if grav_on:
-        # spheres that start on a plane (touching it, not moving away faster than the
-        # landing speed, pressed on by gravity) start in an on-plane state
+        # spheres that start on a wall (touching it, not moving away faster than the
+        # landing speed, pressed on by gravity) start in an on-wall state (a moving plane is
+        # where it is at t = 0: s(0) = 0)
         for i in range(st.shape[0]):
             for w in range(planes_p.shape[0]):
-                if not holds(walls, w):
-                    continue  # no sphere rests on a moving plane
                 gap = wall_gap(i, w, st, walls)
-                gn, vn = pressed(i, w, st, walls, space.gravity)
+                gn, vn = pressed(i, w, 0.0, st, walls, space.gravity)
                 if (abs(gap) <= START_GAP_REL * st[i, S_R] and gn > 0.0
                         and vn <= fsc[F_LANDING_SPEED] and flight.mstate[i] == MS_FLIGHT):
                     enter_plane(i, w, 0.0, no_end, flight, dyn, walls, space.gravity,
@@ -524,7 +523,13 @@ def _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out, pair_tabl
             return STATUS_LOG_FULL
         return GO_ON
     w = np.int64(mplane[i])
-    if curved(walls, w):
+    if ended == END_TAKEOFF:
+        # the plane pulls away faster than gravity, or a piston starts or stops
+        # (hsgran._riding): on the plane, at its speed, the sphere flies
+        advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, rotation)
+        leave_ride(i, w, t, st, walls)
+        leave_plane(i, flight, dyn, space.gravity, rotation)
+    elif curved(walls, w):
         # a segment on a cylinder ends (hsgran._cylinder): on the surface again, with the
         # speed along the track its accelerations gave; flies if no longer pressed on
         prev = track_before(i, t, flight.acc, st, walls, w)

@@ -32,10 +32,11 @@ from hsgran._flight import (
     curved,
     enter_plane,
     halt,
-    holds,
+    holds_now,
     immovable,
     leave_plane,
     min_image,
+    moving,
     pressed,
     stop_on_plane,
     tc_row,
@@ -209,10 +210,12 @@ def _both_slow_on_supports(i, j, flight, walls, v_land):
         return False
     # Not on a cylinder: stopped at two places of a curved wall, the spheres are pulled
     # together at once (their accelerations differ), met again at the same instant and were
-    # stopped again, for ever (seen in drums of 48 and 62 beads); there they collide.
+    # stopped again, for ever (seen in drums of 48 and 62 beads); there they collide. Not on a
+    # moving plane either: its spheres move with it, and their lab speeds say nothing of
+    # their motion relative to it.
     for p in (i, j):
         w = flight.mplane[p]
-        if w >= 0 and curved(walls, w):
+        if w >= 0 and (curved(walls, w) or moving(walls, w)):
             return False
     st = flight.st
     vi2 = st[i, 3] * st[i, 3] + st[i, 4] * st[i, 4] + st[i, 5] * st[i, 5]
@@ -424,11 +427,11 @@ def _resting_plane(i, st, walls, gravity, v_land):
     hopped off them, slightly upwards, would otherwise meet them again and again before it
     ever came back to the plane."""
     for w in range(walls.planes_p.shape[0]):
-        if not holds(walls, w):
-            continue  # no sphere rests on a moving plane
+        if moving(walls, w):
+            continue  # a moving plane meets the sphere at its contact time instead
         gap = wall_gap(i, w, st, walls)
         if gap <= PLANE_TOUCHING_REL * st[i, S_R]:
-            gn, vn = pressed(i, w, st, walls, gravity)
+            gn, vn = pressed(i, w, 0.0, st, walls, gravity)
             if gn > 0.0 and abs(vn) <= v_land:
                 return w
     return -1
@@ -652,11 +655,11 @@ def lands_before_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, fla
     instead (MODEL §5.3; what is given up is the rebound, at most ½ m v_land², see
     hsgran.scene). It is then put on the plane."""
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
-    if not holds(walls, w):
-        return False  # no sphere rests on a moving plane
-    gn, vn = pressed(i, w, flight.st, walls, gravity)
+    gn, vn = pressed(i, w, t, flight.st, walls, gravity)
     if not (gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]):
         return False
+    if not holds_now(walls, w, t, gravity):
+        return False  # a moving plane pulling away: it hits the sphere (or misses it)
     if flight.mstate[i] != MS_FLIGHT:
         leave_plane(i, flight, dyn, gravity, rotation)
     enter_plane(i, w, t, np.int64(END_NONE), flight, dyn, walls, gravity, pair_table, fsc,
@@ -670,7 +673,8 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     sphere on another plane is backed by it (a sphere sliding into a side wall), one knocked
     off its plane flies, one whose rebound is slower than the landing speed lands, and a
     sphere wedged in a zero-time sequence is stopped (an immovable plane). A moving plane hits
-    with its velocity at t, and holds no sphere: no landing, no wedge stop.
+    with its velocity at t; a sphere lands on it by its speed relative to the plane and the
+    load in its frame (hsgran._riding), and is never wedge-stopped against it.
 
     Returns:
         (hit, tc_on, landed, wedged): whether the collision was executed (False: the re-check
@@ -700,8 +704,8 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     row, tc_on = tc_row(pair_table[dyn.mat[i], planes_mat[w]], t, dyn.t_last[i], -NEVER, fsc,
                         dyn.row_tc)
     # a moving plane's or a cylinder's velocity and normal at t are in planes_vel[w],
-    # planes_n[w] (the wall handler); a moving plane holds no sphere, and no sphere is
-    # wedge-stopped against a wall that moves or turns
+    # planes_n[w] (the wall handler); no sphere is wedge-stopped against a wall that moves or
+    # turns
     driven = not immovable(walls, w)
     hit = resolve(st[i, S_V:S_V + 3], wi, walls.planes_vel[w], walls.planes_omg[w],
                   planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0, dyn.inv_i[i],
@@ -720,8 +724,8 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     else:
         if mstate[i] != MS_FLIGHT:
             leave_plane(i, flight, dyn, gravity, rotation)  # knocked off its plane
-        gn, vn = pressed(i, w, st, walls, gravity)
-        if gn > 0.0 and vn <= fsc[F_LANDING_SPEED] and holds(walls, w):
+        gn, vn = pressed(i, w, t, st, walls, gravity)
+        if gn > 0.0 and vn <= fsc[F_LANDING_SPEED] and holds_now(walls, w, t, gravity):
             enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
                         rolling, rotation)
             landed = True

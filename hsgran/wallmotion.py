@@ -19,7 +19,7 @@ import math
 
 from hsgran import wallspec
 from hsgran._jit import njit
-from hsgran.motion import NEVER, plane_contact_time
+from hsgran.motion import APPROACH_NOISE_ULPS, NEVER, ROUNDOFF, plane_contact_time
 from hsgran.wallspec import M_AMP, M_KIND, M_OMEGA, M_PHASE, M_TRAVEL, MOT_VELOCITY
 
 #: Conservative advancement stops when the gap is below this fraction of the radius [-]: the
@@ -60,11 +60,15 @@ def _oscillation_contact(g0, vn, gn, cn, mot, w, t0, radius, horizon):
     curv = gn - bound  # the gap's curvature is at least this
     stop = ADVANCE_STOP_REL * radius
     min_step = MIN_STEP_PHASE / om
+    # an approach below the rounding of the speeds is none (motion.APPROACH_NOISE_ULPS): a
+    # sphere that rode the plane leaves it at the plane's speed, and the rounding of that
+    # speed must not make a contact of the same instant
+    noise = APPROACH_NOISE_ULPS * ROUNDOFF * (abs(vn) + abs(cn) * mot[w, M_AMP] * om)
     tau = 0.0
     g = g0
     for _ in range(MAX_ADVANCE_STEPS):
         slope = vn + gn * tau - cn * wall_speed(mot, w, t0 + tau)
-        if g <= stop and slope < 0.0:
+        if g <= stop and slope < -noise:
             break  # touching and approaching: the contact
         step = plane_contact_time(max(g, 0.0), slope, curv)
         if step == NEVER:

@@ -26,6 +26,7 @@ LAYERS = {
     "_cluster": 5,
     "_observe": 5,
     "_cylinder": 5,
+    "_riding": 5,
     "contact.": 2,
     "motion": 2,
     "wallmotion": 2,
