@@ -504,6 +504,9 @@ enduring contact: with gravity, rules of hsgran's own ([OURS], not from the pape
   landing_speed, the TC model, sleeping and held resting spheres, hops, and stopping a
   sphere wedged between immovable bodies. The summary counts them (land, tc, hop, wedge);
   their parameters and costs in accuracy: docs/enduring-contact.md.
+walls: spheres resting, rolling and sliding on a cylinder or on a moving plane move in
+  segments of hsgran's own ([OURS]), and a collision with a cylinder takes a flat wall's
+  contact radius; their bounds and checks: docs/walls.md.
 """
 
 
