@@ -38,6 +38,10 @@ sys.path.insert(0, str(ROOT))
 #: The bed's surface: this percentile of the small spheres' heights [%] (the few spheres
 #: thrown highest above a vibrated bed are not its surface).
 SURFACE_PERCENTILE = 90.0
+#: The vibrating floor: the scene's wall key of the face whose amplitude each run sets.
+FLOOR = "walls[0].lower_z"
+#: ... and the scene-file path of its amplitude (an override, hsgran.overrides).
+FLOOR_AMPLITUDE = "walls[0].motion.lower_z.amplitude"
 #: The large sphere has risen when its centre is within this many small diameters of the
 #: surface [-].
 RISEN_DIAMETERS = 1.0
@@ -84,13 +88,15 @@ def run_one(scene_path: str, gamma: float, duration: float, settle: float,
     from hsgran.wallspec import M_KIND, M_OMEGA, MOT_OSCILLATION
 
     base = load_scene(scene_path)
-    floor = [p for p in base.planes if p.motion is not None and p.motion[M_KIND] == MOT_OSCILLATION]
-    if not floor:
-        raise SystemExit(f"{scene_path}: no vibrating plane (walls[0].motion.lower_z)")
-    omega = float(floor[0].motion[M_OMEGA])
+    # the face whose amplitude is set below: its frequency is kept
+    floor = next((p for p in base.planes if p.key == FLOOR and p.motion is not None
+                  and p.motion[M_KIND] == MOT_OSCILLATION), None)
+    if floor is None:
+        raise SystemExit(f"{scene_path}: {FLOOR} does not oscillate")
+    omega = float(floor.motion[M_OMEGA])
     amplitude = gamma * abs(base.gravity[2]) / omega**2
     scene = load_scene(scene_path, overrides={
-        "scene.duration": duration, "walls[0].motion.lower_z.amplitude": amplitude})
+        "scene.duration": duration, FLOOR_AMPLITUDE: amplitude})
     radii = np.asarray(scene.radius)
     big = int(np.argmax(radii))
     small = np.nonzero(radii < radii[big])[0]
