@@ -12,7 +12,7 @@ cluster (:func:`gather`), and at the event's instant:
    faster than the landing speed; 0 for a slower one: the contact persists) and a Coulomb cone
    (MODEL §4's μ_s; rolling couples with μ_r, MODEL §5.1), by
    :func:`hsgran.contact.cluster.solve`. Afterwards no contact of the cluster approaches;
-2. **one step of contact dynamics** over the next segment, of length h (:func:`_step_time`):
+2. **one step of contact dynamics** over the next segment, of length h (:func:`_segment_time`):
    the contacts that persist (no longer separating) take the impulses of one Moreau–Jean step
    under gravity, with the same cones, so that none approaches at the step's end; the
    velocity change over h gives each body constant accelerations for the segment (the
@@ -62,12 +62,16 @@ from hsgran._state import (
     FL_ROTATION,
     FL_VISCOUS,
     I_SHORT,
+    I_STEP_SWEEPS,
     I_SWEEPS,
     I_UNSOLVED,
+    I_VISITS,
     S_R,
     S_T,
+    WARM_EMPTY,
+    WARM_SLOTS,
 )
-from hsgran.contact.cluster import solve
+from hsgran.contact.cluster import cap, solve, start
 from hsgran.contact.model import (
     REC_CAPTURED,
     REC_E_N,
@@ -341,40 +345,128 @@ def _impact_setup(nc, clus, pair_table, mat, rec, fsc, flags):
         _cold(c, clus)
 
 
+@njit(inline="always")
+def _room_time(room, v, a):
+    """Time [s] in which a relative motion of speed v [m/s] and acceleration a [m/s²] covers
+    the distance room [m] (v τ + a τ²/2 = room; inf if neither moves)."""
+    if v <= 0.0 and a <= 0.0:
+        return math.inf
+    return 2.0 * room / (v + math.sqrt(v * v + 2.0 * a * room))
+
+
 @njit
-def _step_time(nb, nc, clus, gravity, t):
-    """Length of the next segment of constant accelerations [s]: until a contact between
-    spheres could have moved along its tangent by CURVATURE_REL σ, at the present relative
-    speed or from rest under 2|g| (the normal then turns by 1e-4 rad, and the spheres, which
-    move along the tangent, lift off each other by 5e-9 σ); at most MAX_SEGMENT, at least
-    MIN_SEGMENT_REL × max(1 s, t)."""
-    g2 = 2.0 * math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
-    tau = MAX_SEGMENT
+def _segment_time(nc, clus, h, solved, t):
+    """Length of a segment of constant accelerations [s]: until a contact between spheres
+    could have moved along its tangent by CURVATURE_REL σ (the normal then turns by 1e-4 rad,
+    and the spheres, which move along the tangent, lift off each other by 5e-9 σ), at most
+    ``h`` (MAX_SEGMENT for the step), at least MIN_SEGMENT_REL × max(1 s, t). Before the
+    step's solve (``solved`` False) from the relative velocities only: the step's length h;
+    after it, with the relative accelerations the solve gave too: the segment's length, at
+    most h (the accelerations keep every persisting contact from closing over the whole
+    step, so over any part of it too)."""
+    tau = h
     for c in range(nc):
         if clus.ck_tgt[c] == NO_CONTACT or clus.ck_rb[c] == 0.0:
             continue  # separating, or flat
         a = clus.ck_a[c]
         b = clus.ck_b[c]
         room = CURVATURE_REL * (clus.cl_rad[a] + clus.ck_rb[c])
-        v2 = 0.0
+        v2 = a2 = 0.0
         for k in range(3):
             v2 += (clus.cl_v[a, k] - (clus.cl_v[b, k] if b >= 0 else clus.ck_vb[c, k])) ** 2
-        if v2 > 0.0:
-            tau = min(tau, room / math.sqrt(v2))
-        if g2 > 0.0:
-            tau = min(tau, math.sqrt(2.0 * room / g2))
+            if solved:  # a boundary's ck_ab holds its velocity at the step's end
+                a2 += (clus.cl_a[a, k] - (clus.cl_a[b, k] if b >= 0 else
+                                          (clus.ck_ab[c, k] - clus.ck_vb[c, k]) / h)) ** 2
+        tau = min(tau, _room_time(room, math.sqrt(v2), math.sqrt(a2)))
     return max(tau, MIN_SEGMENT_REL * max(1.0, t))
 
 
+@njit(inline="always")
+def _warm_key(c, clus):
+    """Where contact c's force is kept (:func:`_warm_load`): (owner sphere, partner code,
+    sign): the pair's lower sphere keeps it (a sphere its planes' too); sign −1 when the owner
+    is b (the force on a is then minus the kept one)."""
+    sa = np.int64(clus.cl_body[clus.ck_a[c]])
+    q = clus.ck_q[c]
+    if q < 0 or sa < q:
+        return sa, q, 1.0
+    return q, sa, -1.0
+
+
+@njit(inline="always")
+def _warm_slot(clus, owner, partner, free):
+    """Slot of ``owner``'s kept forces for ``partner``; if it has none, the first empty slot
+    when ``free``, else −1."""
+    empty = -1
+    for k in range(WARM_SLOTS):
+        q = clus.wm_q[owner, k]
+        if q == partner:
+            return k
+        if q == WARM_EMPTY and empty < 0:
+            empty = k
+    return empty if free else -1
+
+
 @njit
-def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation):
+def _warm_load(c, h, clus, friction, rolling):
+    """Contact c of the step starts from its force in the last solve, if kept, times the step
+    h [s]: the normal part at least 0, the tangential part within the cone (μ_s, MODEL §4),
+    the rolling couple within μ_r R* P_n (MODEL §5.1); the caller applies them
+    (:func:`hsgran.contact.cluster.start`)."""
+    owner, partner, sign = _warm_key(c, clus)
+    k = _warm_slot(clus, owner, partner, False)
+    if k < 0:
+        return
+    f = clus.wm_f[owner, k]
+    n = clus.ck_n[c]
+    fn = sign * h * (f[0] * n[0] + f[1] * n[1] + f[2] * n[2])
+    pn = max(fn, 0.0)
+    clus.ck_pn[c] = pn
+    if friction:
+        for j in range(3):
+            clus.ck_pt[c, j] = sign * h * f[j] - fn * n[j]
+        clus.ck_pt[c, 0], clus.ck_pt[c, 1], clus.ck_pt[c, 2] = cap(
+            clus.ck_pt[c, 0], clus.ck_pt[c, 1], clus.ck_pt[c, 2], clus.ck_mu[c] * pn)
+    if rolling:
+        hn = sign * h * (f[3] * n[0] + f[4] * n[1] + f[5] * n[2])
+        for j in range(3):
+            clus.ck_hr[c, j] = sign * h * f[3 + j] - hn * n[j]
+        clus.ck_hr[c, 0], clus.ck_hr[c, 1], clus.ck_hr[c, 2] = cap(
+            clus.ck_hr[c, 0], clus.ck_hr[c, 1], clus.ck_hr[c, 2],
+            clus.ck_mur[c] * clus.ck_reff[c] * pn)
+
+
+@njit
+def _warm_store(nb, nc, h, clus):
+    """Keep the step's contact forces (its impulses over h [s]) for the next solve's warm
+    start: the bodies' own entries are replaced by their contacts now (a pair no longer
+    touching is forgotten); a contact without a free slot is not kept."""
+    for b in range(nb):
+        for k in range(WARM_SLOTS):
+            clus.wm_q[clus.cl_body[b], k] = WARM_EMPTY
+    for c in range(nc):
+        if clus.ck_tgt[c] == NO_CONTACT or clus.ck_pn[c] == 0.0:
+            continue
+        owner, partner, sign = _warm_key(c, clus)
+        k = _warm_slot(clus, owner, partner, True)
+        if k < 0:
+            continue
+        clus.wm_q[owner, k] = partner
+        s = sign / h
+        for j in range(3):
+            clus.wm_f[owner, k, j] = s * (clus.ck_pn[c] * clus.ck_n[c, j] + clus.ck_pt[c, j])
+            clus.wm_f[owner, k, 3 + j] = s * clus.ck_hr[c, j]
+
+
+@njit
+def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation, friction, rolling):
     """The step problem of the contacts that persist (Moreau–Jean over one segment of length h
     [s]): each body's velocity at the segment's end without contacts (v + h g, in ``cl_a``;
     spin in ``cl_al``); a persisting contact (separating after the impulses slower than
     ``v_persist`` [m/s], the landing speed: gravity would bring it back at once) must not
     approach at the end (target 0; its normal velocity then stays ≥ 0 over the segment, so
-    it never closes); a contact separating faster takes nothing. Returns the number of
-    persisting contacts."""
+    it never closes) and starts from its force in the last solve (warm); a contact
+    separating faster takes nothing. Returns the number of persisting contacts."""
     persist = 0
     for b in range(nb):
         for k in range(3):
@@ -391,6 +483,9 @@ def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation):
         else:
             persist += 1
             clus.ck_tgt[c] = 0.0
+            _warm_load(c, h, clus, friction, rolling and rotation)
+    start(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, clus.cl_inv_m, clus.cl_inv_i,
+          clus.cl_rad, clus.cl_a, clus.cl_al, clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation)
     return persist
 
 
@@ -422,6 +517,8 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
     sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation, False,
                                    False, SOLVE_TOL_REL * space.slack[0])
     isc[I_SWEEPS] += sweeps
+    isc[I_STEP_SWEEPS] += sweeps
+    isc[I_VISITS] += sweeps * nc
     if worst > space.slack[0]:
         for b in range(nb):
             for k in range(3):
@@ -613,19 +710,26 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     rec[REC_REGIME] = nb
     loss = e0 - _kinetic(nb, clus, rotation)
     isc[I_SWEEPS] += sweeps
-    h = _step_time(nb, nc, clus, space.gravity, t)
-    if h <= MIN_SEGMENT_REL * max(1.0, t):
-        isc[I_SHORT] += 1
-    _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation)
+    isc[I_VISITS] += sweeps * nc
+    h = _segment_time(nc, clus, MAX_SEGMENT, False, t)
+    _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation, friction,
+                rolling)
     sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
                                    friction, rolling, SOLVE_TOL_REL * space.slack[0])
     isc[I_SWEEPS] += sweeps
+    isc[I_STEP_SWEEPS] += sweeps
+    isc[I_VISITS] += sweeps * nc
     if worst > space.slack[0]:
         isc[I_UNSOLVED] += 1
         _unsolved_step(nb, nc, h, clus, isc, space, rotation)
+    else:
+        _warm_store(nb, nc, h, clus)
     _accelerations(nb, h, clus)
+    tau = _segment_time(nc, clus, h, True, t)
+    if tau <= MIN_SEGMENT_REL * max(1.0, t):
+        isc[I_SHORT] += 1
     _rest_candidates(nb, nc, h, clus, fsc, space.gravity)
-    loss += _apply_states(nb, nc, t, h, flight, dyn, walls, space, grid, sched, clus, isc,
+    loss += _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, isc,
                           pair_table, fsc, flags)
     fsc[F_CLUSTER_LOSS] += loss
     rec[REC_ENERGY_LOST] = loss

@@ -69,10 +69,13 @@ Sched = namedtuple("Sched", "ev_t ev_seq ev_kind ev_partner ev_pcount cal")
 #: spins ``cl_w`` [rad/s], accelerations ``cl_a`` [m/s²] and ``cl_al`` [rad/s²]) and the
 #: contacts (``ck_*``: the arrays of hsgran.contact.cluster.solve, the partner ``ck_q`` (a
 #: sphere, or −1 − w for plane w), its material ``ck_mat``, and the immovable body's
-#: acceleration ``ck_ab`` [m/s²]).
+#: acceleration ``ck_ab`` [m/s²]); and, kept from solve to solve (not scratch), the contact
+#: forces of the last solve that warm-start the next (``wm_q`` the partner of each of a
+#: sphere's WARM_SLOTS entries, a sphere or −1 − w for plane w, or WARM_EMPTY; ``wm_f`` the
+#: force [N] and rolling torque [N m] on the sphere, by the pair's lower sphere index).
 Clus = namedtuple("Clus", "cl_body cl_loc cl_was cl_depth cl_inv_m cl_inv_i cl_rad cl_v cl_w "
                           "cl_a cl_al ck_a ck_b ck_q ck_mat ck_n ck_rb ck_vb ck_ab ck_tgt ck_mu "
-                          "ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr")
+                          "ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr wm_q wm_f")
 #: Output buffers: frame times [s], positions [m], velocities [m/s], spins [rad/s], the event
 #: log (floats ``log_f``: time, J_n, J_t, e_n; ints ``log_i``: kind, i, j, stage, regime) and
 #: motion states per frame; with observables on, ``fr_obs`` the sums ``obs`` of the interval
@@ -83,7 +86,8 @@ Out = namedtuple("Out", "fr_time fr_pos fr_vel fr_omg log_f log_i fr_ms fr_obs")
 GROUPS = (Flight, Dyn, Walls, Space, Grid, Sched, Clus, Out)
 
 #: Fields the loop overwrites before it reads them (not stored in checkpoints).
-SCRATCH = frozenset({"row_tc", "heads", "shifts", "ac", "ah", "stack"}) | set(Clus._fields)
+SCRATCH = frozenset({"row_tc", "heads", "shifts", "ac", "ah", "stack"}) | (
+    set(Clus._fields) - {"wm_q", "wm_f"})
 #: Fields rebuilt or emptied rather than stored: the calendar (rebuilt from ``ev_t``/``ev_seq``)
 #: and the output buffers (handed to the observers before every checkpoint).
 NOT_STORED = SCRATCH | {"cal"} | set(Out._fields)
@@ -128,7 +132,9 @@ I_PEND_LAYER = 8  #: the cell face that the sphere in I_PEND_A just crossed (EV_
 I_SWEEPS = 9  #: Gauss–Seidel sweeps of the cluster solves so far (hsgran._cluster; their cost)
 I_SHORT = 10  #: cluster segments cut to the shortest (MIN_SEGMENT_REL)
 I_UNSOLVED = 11  #: cluster force solves that ended short of the slack (not converged)
-I_SIZE = 12
+I_STEP_SWEEPS = 12  #: the part of I_SWEEPS spent on the steps' force solves
+I_VISITS = 13  #: contacts visited by the cluster solves (sweeps × contacts: the solves' work)
+I_SIZE = 14
 
 # the sums of one frame interval (``obs``, hsgran._observe), observables on only
 OB_MOMENT = 0  #: Σ b ⊗ J over the contacts' impulses [kg m²/s], 3 × 3 row-major (9 entries)
@@ -203,6 +209,13 @@ MAX_CLUSTER_BODIES = 4096
 #: up to ~30 of them, but each contact is stored once, by the first of its two bodies, so a
 #: cluster averages about 3 (half the coordination number of a pile) plus its walls.
 CONTACTS_PER_BODY = 16
+#: Contact forces kept per sphere to warm-start the next solve (hsgran._cluster): each pair is
+#: kept once, by its lower sphere, so a sphere keeps about half its contacts (up to ~15 of the
+#: ~30 a sphere among spheres three times smaller has) and its walls; a contact with no room
+#: starts cold, which costs sweeps, not accuracy.
+WARM_SLOTS = 16
+#: Partner code of an empty warm-start slot (spheres are ≥ 0, planes −1 − w).
+WARM_EMPTY = -(1 << 62)
 
 
 @dataclass(frozen=True)
@@ -351,6 +364,8 @@ FIELDS = (
     _f("Clus", "ck_pn", "f8", ("ck",)),
     _f("Clus", "ck_pt", "f8", ("ck", 3)),
     _f("Clus", "ck_hr", "f8", ("ck", 3)),
+    _f("Clus", "wm_q", "i8", ("cn", WARM_SLOTS), fill=WARM_EMPTY),
+    _f("Clus", "wm_f", "f8", ("cn", WARM_SLOTS, 6)),
     _f("Out", "fr_time", "f8", ("frames",)),
     _f("Out", "fr_pos", "f8", ("frames", "n", 3)),
     _f("Out", "fr_vel", "f8", ("frames", "n", 3)),

@@ -69,8 +69,9 @@ EVENTS_PER_CALL = 200_000
 #: hsgran._state, scratch space no longer stored; 6: the "cluster" event count, the cluster
 #: slack ``Space.slack`` and the cluster scalars; 7: the observables' ledger and sums; 8: the
 #: planes' prescribed motions ``planes_mot``; 9: the walls' kinds and the cylinders,
-#: ``planes_kind`` and ``planes_cyl``).
-CHECKPOINT_VERSION = 9
+#: ``planes_kind`` and ``planes_cyl``; 10: the cluster solves' warm-start forces ``wm_q`` and
+#: ``wm_f``).
+CHECKPOINT_VERSION = 10
 
 
 class SimulationError(HsgranError):

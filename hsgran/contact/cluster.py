@@ -100,7 +100,7 @@ def _apply(k, dx, dy, dz, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, rotation):
 
 
 @njit(inline="always")
-def _cap(x, y, z, limit):
+def cap(x, y, z, limit):
     """(x, y, z) scaled down to length ``limit`` if longer."""
     m = math.sqrt(x * x + y * y + z * z)
     if m > limit:
@@ -134,7 +134,7 @@ def _rolling_step(k, ca, cb, cn, inv_i, w, hr, rslip, limit):
     if rslip[k, 0] != 0.0 or rslip[k, 1] != 0.0 or rslip[k, 2] != 0.0:
         hx, hy, hz = -limit * rslip[k, 0], -limit * rslip[k, 1], -limit * rslip[k, 2]
     else:
-        hx, hy, hz = _cap(hr[k, 0] - ox / wsum, hr[k, 1] - oy / wsum, hr[k, 2] - oz / wsum,
+        hx, hy, hz = cap(hr[k, 0] - ox / wsum, hr[k, 1] - oy / wsum, hr[k, 2] - oz / wsum,
                           limit)
     dx, dy, dz = hx - hr[k, 0], hy - hr[k, 1], hz - hr[k, 2]
     hr[k, 0], hr[k, 1], hr[k, 2] = hx, hy, hz
@@ -146,6 +146,25 @@ def _rolling_step(k, ca, cb, cn, inv_i, w, hr, rslip, limit):
         w[b, 1] -= inv_b * dy
         w[b, 2] -= inv_b * dz
     return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+@njit
+def start(nc, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation):
+    """Warm start: apply the contacts' starting impulses ``pn`` n + ``pt`` and rolling couples
+    ``hr`` (those of an earlier solve; the arguments as in :func:`solve`) to the bodies'
+    ``v``, ``w``, before :func:`solve` goes on from them. Starting from the solution of a
+    nearby problem, Gauss–Seidel needs fewer sweeps (Jean 1999; Acary & Brogliato 2008, ch.
+    13: the impulses of the previous step as the first iterate)."""
+    for k in range(nc):
+        _apply(k, pn[k] * cn[k, 0] + pt[k, 0], pn[k] * cn[k, 1] + pt[k, 1],
+               pn[k] * cn[k, 2] + pt[k, 2], ca, cb, cn, crb, inv_m, inv_i, rad, v, w, rotation)
+        if rotation:
+            a = ca[k]
+            b = cb[k]
+            for j in range(3):
+                w[a, j] += inv_i[a] * hr[k, j]
+                if b >= 0:
+                    w[b, j] -= inv_i[b] * hr[k, j]
 
 
 @njit
@@ -186,7 +205,8 @@ def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, i
             [m/s²] and angular accelerations [rad/s²]), updated in place.
         pn, pt, hr: (≥nc,), (≥nc, 3), (≥nc, 3) normal and tangential impulse [N s] (or force
             [N]) and rolling couple [N m s] (or torque [N m]) of each contact, updated in
-            place (zeros to start cold; the values of an earlier solve to start warm).
+            place (zeros to start cold; to start warm, the values of an earlier solve, applied
+            to ``v`` and ``w`` first by :func:`start`).
         rotation, friction, rolling: Which parts are solved (the scene's effects).
         tol: Converged when no contact's impulse changed in a sweep by more than it takes to
             change the contact's relative velocity by ``tol`` [m/s] (or acceleration [m/s²];
@@ -235,7 +255,7 @@ def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, i
                     sx = ux - un * nx
                     sy = uy - un * ny
                     sz = uz - un * nz
-                    qx, qy, qz = _cap(tx - sx / w_t, ty - sy / w_t, tz - sz / w_t,
+                    qx, qy, qz = cap(tx - sx / w_t, ty - sy / w_t, tz - sz / w_t,
                                       mu[k] * p_new)
                 pt[k, 0], pt[k, 1], pt[k, 2] = qx, qy, qz
                 dx += qx - tx

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from hsgran.contact.cluster import solve
+from hsgran.contact.cluster import solve, start
 
 #: Steel sphere of radius 1 mm: mass [kg] and moment of inertia [kg m²].
 R = 1e-3
@@ -41,12 +41,18 @@ class Cluster:
         self.rows.append((a, b, n, rb, np.asarray(vb, float), target, mu,
                           np.asarray(slip, float), mur, reff))
 
-    def solve(self, rotation=True, friction=True, rolling=False):
+    def solve(self, rotation=True, friction=True, rolling=False, warm=None):
+        """Solve cold, or warm from ``warm`` = (pn, pt, hr) applied by ``start`` first."""
         nc = len(self.rows)
         col = list(zip(*self.rows, strict=True))
         self.pn = np.zeros(nc)
         self.pt = np.zeros((nc, 3))
         self.hr = np.zeros((nc, 3))
+        if warm is not None:
+            self.pn[:], self.pt[:], self.hr[:] = warm
+            start(nc, np.array(col[0], np.int64), np.array(col[1], np.int64), np.array(col[2]),
+                  np.array(col[3], float), self.inv_m, self.inv_i, self.rad, self.v, self.w,
+                  self.pn, self.pt, self.hr, rotation)
         sweeps, worst = solve(nc, np.array(col[0], np.int64), np.array(col[1], np.int64),
                               np.array(col[2]), np.array(col[3], float), np.array(col[4]),
                               np.array(col[5], float), np.array(col[6], float),
@@ -142,6 +148,36 @@ def test_sphere_on_three_spheres_on_a_plate_needs_friction_to_stand(mu, static):
     else:
         assert c.v[3, 2] < -0.1 * G
         assert np.hypot(c.v[:3, 0], c.v[:3, 1]).min() > 0.01 * G
+
+
+@pytest.mark.parametrize("scale", [1.0, 0.9, 1.2])
+def test_warm_start_from_a_solution_converges_at_once_to_the_same_motion(scale):
+    """The pyramid on a plate with friction and rolling resistance, solved cold, then again
+    from the same gravity warm from its impulses (scaled: an earlier, nearby solve): exact,
+    the solve ends in the first sweeps; scaled, it converges again to the same motion (rest),
+    in fewer sweeps than cold."""
+    normals, _ = _three_below(R)
+
+    def pyramid():
+        c = Cluster(4)
+        c.v[:, 2] = -G
+        for k, n in enumerate(normals):
+            c.contact(3, k, n, mu=0.5, mur=0.01)
+            c.contact(k, -1, (0, 0, 1), mu=0.5, mur=0.01)
+        return c
+
+    cold = pyramid()
+    cold.solve(rolling=True)
+    warm = pyramid()
+    warm.solve(rolling=True, warm=(scale * cold.pn, scale * cold.pt, scale * cold.hr))
+    np.testing.assert_allclose(warm.v, 0.0, atol=1e-7 * G)
+    np.testing.assert_allclose(warm.w, 0.0, atol=1e-7 * G / R)
+    assert warm.pn[1::2].sum() == pytest.approx(4 * M * G, rel=1e-7)
+    if scale == 1.0:
+        assert warm.sweeps <= 2
+        np.testing.assert_allclose(warm.pn, cold.pn, rtol=1e-12)
+    else:
+        assert warm.sweeps < cold.sweeps
 
 
 @pytest.mark.parametrize("beta_deg", [20.0, 45.0, 70.0])
