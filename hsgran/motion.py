@@ -280,6 +280,12 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
         sigma: Contact distance [m].
         horizon: Only contacts up to this delay [s] are wanted (finite or ``inf``).
 
+    Two spheres that overlap by round-off (f(0) < 0) and separate too slowly to clear σ
+    before their accelerations turn them back have no downward crossing of f: they are met
+    where they come back to the distance they have now (f measured from |r|² instead of σ²),
+    or, where that excursion is below the rounding of the distance, where they start to come
+    back; not never, which would let them pass through each other. [OURS]
+
     Returns:
         Delay τ ≥ 0 [s] of the contact, or ``inf`` if none before the horizon.
     """
@@ -317,7 +323,12 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
         noise = 2.0 * approach_noise(sigma, v_sum, x_sum)
         if c1 < -noise or (c2 < 0.0 and c1 <= noise):
             return 0.0
-    return _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, 1.0, c4, c3, c2, c1, h, touching)
+    tau = _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, 1.0, c4, c3, c2, c1, h, touching)
+    if tau == NEVER and c0 < 0.0 and (c2 < 0.0 or c3 < 0.0):
+        # (with c2, c3 ≥ 0 and c4 > 0, f' > 0 for τ > 0: a pair that separates never comes back,
+        # which is most touching pairs after a collision)
+        return _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, 1.0, c4, c3, c2, c1, h)
+    return tau
 
 
 # long: one walk over the pieces of a quartic, bracketing at each step; split, the pieces'
@@ -370,6 +381,36 @@ def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, c4, c3, c2, c1, h, 
         found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, h)
         if found:
             return tau
+    return NEVER
+
+
+@njit
+def _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, sgn, c4, c3, c2, c1, h):
+    """A pair overlapping by round-off (f(0) < 0) whose f crosses zero nowhere in [0, h]: the
+    first τ where f falls back to f(0) (the distance it has now), or, where f's rise is below
+    the rounding of the distance, the first τ where f starts to fall (f' from + to −, from the
+    coefficients); ``inf`` if neither (see :func:`pair_contact_accelerated`). [OURS]"""
+    tau = _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, rx * rx + ry * ry + rz * rz, sgn, c4,
+                      c3, c2, c1, h, True)
+    if tau < NEVER:
+        return tau
+    # the first peak: the zeros of f'' (a quadratic) inside (0, h) split it into pieces where
+    # f' is monotone (scalars: kernels do not allocate, see hsgran._jit)
+    qa, qb, qc = 12.0 * c4, 6.0 * c3, 2.0 * c2
+    q1 = q2 = h
+    disc = qb * qb - 4.0 * qa * qc
+    if disc > 0.0:
+        sq = math.sqrt(disc)
+        lo_q = min((-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa))
+        hi_q = max((-qb - sq) / (2.0 * qa), (-qb + sq) / (2.0 * qa))
+        q1 = lo_q if 0.0 < lo_q < h else h
+        q2 = hi_q if 0.0 < hi_q < h else h
+        q1, q2 = min(q1, q2), max(q1, q2)
+    lo = 0.0
+    for hi in (q1, q2, h):
+        if hi > lo and _dpoly(c4, c3, c2, c1, lo) > 0.0 >= _dpoly(c4, c3, c2, c1, hi):
+            return _dpoly_root(c4, c3, c2, c1, lo, hi)
+        lo = max(lo, hi)
     return NEVER
 
 
@@ -427,5 +468,9 @@ def cylinder_contact_time(qx, qy, qz, ux, uy, uz, gx, gy, gz, rho, side, horizon
     ac4 = abs(c4)
     bound = 2.0 * max(abs(c3) / ac4, math.sqrt(abs(c2) / ac4), (abs(c1) / ac4) ** (1.0 / 3.0),
                       (0.5 * abs(c0) / ac4) ** 0.25)
-    return _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, s2, sgn, c4, c3, c2, c1,
-                       min(horizon, bound), touching)
+    tau = _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, s2, sgn, c4, c3, c2, c1,
+                      min(horizon, bound), touching)
+    if tau == NEVER and c0 < 0.0:  # overlapping (see pair_contact_accelerated)
+        return _way_back(qx, qy, qz, ux, uy, uz, gx, gy, gz, sgn, c4, c3, c2, c1,
+                         min(horizon, bound))
+    return tau
