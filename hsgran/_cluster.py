@@ -47,7 +47,6 @@ from hsgran._flight import (
     halt,
     leave_plane,
     min_image,
-    plane_gap,
     state_at,
 )
 from hsgran._jit import njit
@@ -83,7 +82,7 @@ from hsgran.contact.model import (
     resolve,
 )
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S
-from hsgran.motion import NEVER
+from hsgran.motion import NEVER, plane_gap
 from hsgran.onplane import END_NONE, END_RESOLVE, MS_FLIGHT, MS_REST, MS_SUPPORTED
 
 #: A segment of constant accelerations lasts until a contact between spheres has moved

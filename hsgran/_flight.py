@@ -32,9 +32,9 @@ from hsgran._riding import (
 )
 from hsgran._state import F_CHI, F_TC_TIME, S_R, S_T, S_V
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
-from hsgran.motion import NEVER, approach_noise, flight_position
+from hsgran.motion import NEVER, approach_noise, flight_position, plane_gap
 from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
-from hsgran.wallmotion import wall_shift, wall_speed
+from hsgran.wallmotion import wall_speed
 from hsgran.wallspec import CY_OMEGA, M_DIR, WK_CYLINDER, WK_MOVING, WK_PLANE
 
 #: A sphere whose gap to a plane is within this fraction of its radius counts as touching it
@@ -292,29 +292,12 @@ def wall_gap(i, w, st, walls):
 
 
 @njit(inline="always")
-def moving_gap(x, y, z, r, walls, w, t):
-    """Gap [m] between a sphere of radius r [m] at (x, y, z) [m] and moving plane w at time t
-    [s], and d·n, the share of the plane's motion along its normal."""
-    mot, n = walls.planes_mot, walls.planes_n
-    cn = mot[w, M_DIR] * n[w, 0] + mot[w, M_DIR + 1] * n[w, 1] + mot[w, M_DIR + 2] * n[w, 2]
-    return (plane_gap(x, y, z, r, walls.planes_p, n, w) - cn * wall_shift(mot, w, t)), cn
-
-
-@njit(inline="always")
 def set_wall_velocity(walls, w, t):
     """Store moving plane w's velocity at time t [s] in ``planes_vel[w]`` [m/s] (what the
     collision model reads as the wall's velocity)."""
     speed = wall_speed(walls.planes_mot, w, t)
     for k in range(3):
         walls.planes_vel[w, k] = speed * walls.planes_mot[w, M_DIR + k]
-
-
-@njit(inline="always")
-def plane_gap(x, y, z, r, planes_p, planes_n, w):
-    """Gap [m] between a sphere of radius r [m] centred at (x, y, z) [m] and plane w (negative:
-    overlap)."""
-    return ((x - planes_p[w, 0]) * planes_n[w, 0] + (y - planes_p[w, 1]) * planes_n[w, 1]
-            + (z - planes_p[w, 2]) * planes_n[w, 2] - r)
 
 
 #: Restitution of a collision the TC model makes elastic.

@@ -46,7 +46,6 @@ from hsgran._flight import (
     leave_plane,
     min_image,
     moving,
-    moving_gap,
     note_progress,
     pressed,
     set_wall_velocity,
@@ -64,7 +63,7 @@ from hsgran._observe import (
     observing,
 )
 from hsgran._predict import predict, predict_fn, prefetch_cells, repredict_later
-from hsgran._riding import END_TAKEOFF, leave_ride
+from hsgran._riding import END_TAKEOFF, leave_ride, moving_gap
 from hsgran._settling import (
     SETTLE_NONE,
     SETTLE_SLEEP,

@@ -14,11 +14,10 @@ from hsgran._flight import (
     PLANE_TOUCHING_REL,
     TOUCH_REL,
     moving,
-    moving_gap,
-    plane_gap,
     state_at,
 )
 from hsgran._jit import njit, prefetch
+from hsgran._riding import moving_gap
 from hsgran._state import I_PEND_A, I_PEND_B, I_SEQ, S_R
 from hsgran.events.calendar import calendar_update, has_buckets
 from hsgran.events.kinds import EV_CELL, EV_NONE, EV_PAIR, EV_STATE, EV_WALL
@@ -29,6 +28,7 @@ from hsgran.motion import (
     pair_contact_accelerated,
     pair_contact_before,
     plane_contact_time,
+    plane_gap,
 )
 from hsgran.onplane import MS_FLIGHT, MS_SUPPORTED
 from hsgran.wallmotion import moving_plane_contact_time

@@ -43,7 +43,7 @@ import numpy as np
 from hsgran._jit import njit
 from hsgran._state import F_CHI, S_R, S_V
 from hsgran.materials import P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
-from hsgran.motion import NEVER
+from hsgran.motion import NEVER, plane_gap
 from hsgran.onplane import END_NONE, END_SLIP, MS_REST, MS_ROLLING, plane_segment
 from hsgran.wallmotion import wall_shift, wall_speed
 from hsgran.wallspec import (
@@ -81,6 +81,15 @@ def _motion_along_normal(walls, w):
     """d·n of moving plane w: the share of its motion along its normal [-]."""
     mot, n = walls.planes_mot, walls.planes_n
     return mot[w, M_DIR] * n[w, 0] + mot[w, M_DIR + 1] * n[w, 1] + mot[w, M_DIR + 2] * n[w, 2]
+
+
+@njit(inline="always")
+def moving_gap(x, y, z, r, walls, w, t):
+    """Gap [m] between a sphere of radius r [m] at (x, y, z) [m] and moving plane w at time t
+    [s], and d·n, the share of the plane's motion along its normal."""
+    cn = _motion_along_normal(walls, w)
+    return (plane_gap(x, y, z, r, walls.planes_p, walls.planes_n, w)
+            - cn * wall_shift(walls.planes_mot, w, t)), cn
 
 
 @njit(inline="always")
@@ -171,10 +180,7 @@ def snap_to_plane(i, w, t, st, walls, with_speed=True):
     """Put sphere i on moving plane w at time t [s]: no gap, and (``with_speed``) the plane's
     normal speed."""
     n = walls.planes_n
-    cn = _motion_along_normal(walls, w)
-    p = walls.planes_p
-    gap = ((st[i, 0] - p[w, 0]) * n[w, 0] + (st[i, 1] - p[w, 1]) * n[w, 1]
-           + (st[i, 2] - p[w, 2]) * n[w, 2] - st[i, S_R] - cn * wall_shift(walls.planes_mot, w, t))
+    gap, _ = moving_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], walls, w, t)
     vn = relative_normal_speed(st[i, 3], st[i, 4], st[i, 5], walls, w, t) if with_speed else 0.0
     for k in range(3):
         st[i, k] -= gap * n[w, k]

@@ -153,6 +153,14 @@ def plane_contact_time(gap, vn, gn):
     return upward_root(-gap, -vn, -gn)
 
 
+@njit(inline="always")
+def plane_gap(x, y, z, r, planes_p, planes_n, w):
+    """Gap [m] between a sphere of radius r [m] centred at (x, y, z) [m] and plane w (negative:
+    overlap)."""
+    return ((x - planes_p[w, 0]) * planes_n[w, 0] + (y - planes_p[w, 1]) * planes_n[w, 1]
+            + (z - planes_p[w, 2]) * planes_n[w, 2] - r)
+
+
 @njit
 def face_exit_time(x, v, g, lo, hi):
     """Time until a coordinate in free flight leaves the interval [lo, hi], and which side.
@@ -384,6 +392,12 @@ def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, c4, c3, c2, c1, h, 
     return NEVER
 
 
+#: An excursion of f = |d|² − |r|² below this many units of round-off of |r|² is lost in the
+#: rounding of |d|² (a handful of operations) [-]: :func:`_way_back` meets such a pair where
+#: it starts to come back.
+DISTANCE_ROUNDING_ULPS = 8
+
+
 @njit
 def _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, sgn, c4, c3, c2, c1, h):
     """A pair overlapping by round-off (f(0) < 0) whose f crosses zero nowhere in [0, h]: the
@@ -409,7 +423,13 @@ def _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, sgn, c4, c3, c2, c1, h):
     lo = 0.0
     for hi in (q1, q2, h):
         if hi > lo and _dpoly(c4, c3, c2, c1, lo) > 0.0 >= _dpoly(c4, c3, c2, c1, hi):
-            return _dpoly_root(c4, c3, c2, c1, lo, hi)
+            top = _dpoly_root(c4, c3, c2, c1, lo, hi)
+            # only an excursion lost in the rounding of |d|²: a larger one that comes back
+            # after h (the horizon) is no contact before it
+            rise = top * (c1 + top * (c2 + top * (c3 + top * c4)))
+            if rise <= DISTANCE_ROUNDING_ULPS * ROUNDOFF * (rx * rx + ry * ry + rz * rz):
+                return top
+            return NEVER
         lo = max(lo, hi)
     return NEVER
 
