@@ -499,6 +499,16 @@ def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol):
                  friction, rolling, tol)
 
 
+@njit(inline="always")
+def _count(isc, sweeps, nc, step):
+    """Book a solve's work: its sweeps (a step's force solve: also I_STEP_SWEEPS) and the
+    contacts they visited."""
+    isc[I_SWEEPS] += sweeps
+    if step:
+        isc[I_STEP_SWEEPS] += sweeps
+    isc[I_VISITS] += sweeps * nc
+
+
 @njit
 def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
     """The step's solve with friction did not converge (Gauss–Seidel with Coulomb cones need
@@ -515,9 +525,7 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
         _cold(c, clus)
     sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation, False,
                                    False, SOLVE_TOL_REL * space.slack[0])
-    isc[I_SWEEPS] += sweeps
-    isc[I_STEP_SWEEPS] += sweeps
-    isc[I_VISITS] += sweeps * nc
+    _count(isc, sweeps, nc, True)
     if worst > space.slack[0]:
         for b in range(nb):
             for k in range(3):
@@ -708,16 +716,13 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     rec[REC_STAGE] = STAGE_CLUSTER
     rec[REC_REGIME] = nb
     loss = e0 - _kinetic(nb, clus, rotation)
-    isc[I_SWEEPS] += sweeps
-    isc[I_VISITS] += sweeps * nc
+    _count(isc, sweeps, nc, False)
     h = _segment_time(nc, clus, MAX_SEGMENT, False, t)
     _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation, friction,
                 rolling)
     sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
                                    friction, rolling, SOLVE_TOL_REL * space.slack[0])
-    isc[I_SWEEPS] += sweeps
-    isc[I_STEP_SWEEPS] += sweeps
-    isc[I_VISITS] += sweeps * nc
+    _count(isc, sweeps, nc, True)
     if worst > space.slack[0]:
         isc[I_UNSOLVED] += 1
         _unsolved_step(nb, nc, h, clus, isc, space, rotation)

@@ -404,8 +404,8 @@ def _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, sgn, c4, c3, c2, c1, h):
     first τ where f falls back to f(0) (the distance it has now), or, where f's rise is below
     the rounding of the distance, the first τ where f starts to fall (f' from + to −, from the
     coefficients); ``inf`` if neither (see :func:`pair_contact_accelerated`). [OURS]"""
-    tau = _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, rx * rx + ry * ry + rz * rz, sgn, c4,
-                      c3, c2, c1, h, True)
+    rr = rx * rx + ry * ry + rz * rz
+    tau = _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, rr, sgn, c4, c3, c2, c1, h, True)
     if tau < NEVER:
         return tau
     # the first peak: the zeros of f'' (a quadratic) inside (0, h) split it into pieces where
@@ -427,7 +427,7 @@ def _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, sgn, c4, c3, c2, c1, h):
             # only an excursion lost in the rounding of |d|²: a larger one that comes back
             # after h (the horizon) is no contact before it
             rise = top * (c1 + top * (c2 + top * (c3 + top * c4)))
-            if rise <= DISTANCE_ROUNDING_ULPS * ROUNDOFF * (rx * rx + ry * ry + rz * rz):
+            if rise <= DISTANCE_ROUNDING_ULPS * ROUNDOFF * rr:
                 return top
             return NEVER
         lo = max(lo, hi)

@@ -110,6 +110,20 @@ def cap(x, y, z, limit):
 
 
 @njit(inline="always")
+def _apply_couple(k, dx, dy, dz, ca, cb, inv_i, w):
+    """Apply the rolling couple change d to contact k: +d on a's spin, −d on b's."""
+    a = ca[k]
+    b = cb[k]
+    w[a, 0] += inv_i[a] * dx
+    w[a, 1] += inv_i[a] * dy
+    w[a, 2] += inv_i[a] * dz
+    if b >= 0:
+        w[b, 0] -= inv_i[b] * dx
+        w[b, 1] -= inv_i[b] * dy
+        w[b, 2] -= inv_i[b] * dz
+
+
+@njit(inline="always")
 def _rolling_step(k, ca, cb, cn, inv_i, w, hr, rslip, limit):
     """Rolling resistance at contact k: the torque ("impulse" of angular kind) on a is hr[k],
     −hr[k] on b, tangential, of length at most ``limit`` (μ_r R* P_n), opposing the rolling part
@@ -138,13 +152,7 @@ def _rolling_step(k, ca, cb, cn, inv_i, w, hr, rslip, limit):
                           limit)
     dx, dy, dz = hx - hr[k, 0], hy - hr[k, 1], hz - hr[k, 2]
     hr[k, 0], hr[k, 1], hr[k, 2] = hx, hy, hz
-    w[a, 0] += inv_i[a] * dx
-    w[a, 1] += inv_i[a] * dy
-    w[a, 2] += inv_i[a] * dz
-    if b >= 0:
-        w[b, 0] -= inv_b * dx
-        w[b, 1] -= inv_b * dy
-        w[b, 2] -= inv_b * dz
+    _apply_couple(k, dx, dy, dz, ca, cb, inv_i, w)
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
@@ -159,12 +167,7 @@ def start(nc, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation):
         _apply(k, pn[k] * cn[k, 0] + pt[k, 0], pn[k] * cn[k, 1] + pt[k, 1],
                pn[k] * cn[k, 2] + pt[k, 2], ca, cb, cn, crb, inv_m, inv_i, rad, v, w, rotation)
         if rotation:
-            a = ca[k]
-            b = cb[k]
-            for j in range(3):
-                w[a, j] += inv_i[a] * hr[k, j]
-                if b >= 0:
-                    w[b, j] -= inv_i[b] * hr[k, j]
+            _apply_couple(k, hr[k, 0], hr[k, 1], hr[k, 2], ca, cb, inv_i, w)
 
 
 @njit
