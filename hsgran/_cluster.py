@@ -70,7 +70,7 @@ from hsgran._state import (
     WARM_EMPTY,
     WARM_SLOTS,
 )
-from hsgran.contact.cluster import cap, solve, start
+from hsgran.contact.cluster import cap, solve_polished, start
 from hsgran.contact.model import (
     REC_CAPTURED,
     REC_E_N,
@@ -490,13 +490,13 @@ def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation, friction, rolling
 
 @njit
 def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol):
-    """:func:`hsgran.contact.cluster.solve` on the cluster's contacts, with the bodies'
-    velocities (or the step's end velocities) ``v``, ``w`` and the immovable partners' ``vb``;
-    returns (sweeps, worst)."""
-    return solve(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, vb, clus.ck_tgt, clus.ck_mu,
-                 clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip, clus.cl_inv_m,
-                 clus.cl_inv_i, clus.cl_rad, v, w, clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation,
-                 friction, rolling, tol)
+    """:func:`hsgran.contact.cluster.solve_polished` on the cluster's contacts, with the
+    bodies' velocities (or the step's end velocities) ``v``, ``w`` and the immovable partners'
+    ``vb``; returns (sweeps, worst)."""
+    return solve_polished(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, vb, clus.ck_tgt,
+                          clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip,
+                          clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, v, w, clus.ck_pn,
+                          clus.ck_pt, clus.ck_hr, rotation, friction, rolling, tol)
 
 
 @njit(inline="always")
@@ -518,9 +518,10 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
     contact closes within the segment, which a contact left approaching would (a zero-time
     sequence). Counted in ``isc[I_UNSOLVED]``."""
     for b in range(nb):
+        held = clus.cl_depth[b] < 0  # held at rest (_hold_rests)
         for k in range(3):
-            clus.cl_a[b, k] = clus.cl_v[b, k] + h * space.gravity[k]
-            clus.cl_al[b, k] = clus.cl_w[b, k] if rotation else 0.0
+            clus.cl_a[b, k] = 0.0 if held else clus.cl_v[b, k] + h * space.gravity[k]
+            clus.cl_al[b, k] = clus.cl_w[b, k] if rotation and not held else 0.0
     for c in range(nc):
         _cold(c, clus)
     sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation, False,
@@ -528,9 +529,25 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
     _count(isc, sweeps, nc, True)
     if worst > space.slack[0]:
         for b in range(nb):
-            for k in range(3):
-                clus.cl_a[b, k] = clus.cl_v[b, k]
-                clus.cl_al[b, k] = clus.cl_w[b, k]
+            if clus.cl_depth[b] >= 0:
+                for k in range(3):
+                    clus.cl_a[b, k] = clus.cl_v[b, k]
+                    clus.cl_al[b, k] = clus.cl_w[b, k]
+
+
+@njit
+def _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling):
+    """The step's force solve, on from the impulses it has; if it stops short of the slack,
+    the fallback :func:`_unsolved_step` (counted in ``isc[I_UNSOLVED]``). Returns whether it
+    was solved."""
+    sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
+                                   friction, rolling, SOLVE_TOL_REL * space.slack[0])
+    _count(isc, sweeps, nc, True)
+    if worst > space.slack[0]:
+        isc[I_UNSOLVED] += 1
+        _unsolved_step(nb, nc, h, clus, isc, space, rotation)
+        return False
+    return True
 
 
 @njit
@@ -544,11 +561,11 @@ def _accelerations(nb, h, clus):
 
 
 @njit
-def _rest_candidates(nb, nc, h, clus, fsc, gravity):
+def _rest_candidates(nb, nc, clus, fsc, gravity):
     """Mark in ``cl_depth`` (−1) the bodies that come to rest: slower than the landing speed
-    now (what is given up), at a standstill at the step's end (below SLIP_REL × the landing
-    speed, R × spin included: their supports hold them), and not resting on a body that goes
-    on moving (a persisting contact below them)."""
+    now (what is given up), at a standstill at the step's end (its velocities in ``cl_a``,
+    ``cl_al``: below SLIP_REL × the landing speed, R × spin included: their supports hold
+    them), and not resting on a body that goes on moving (a persisting contact below them)."""
     v_land = fsc[F_LANDING_SPEED]
     v_still = SLIP_REL * v_land
     for b in range(nb):
@@ -557,8 +574,8 @@ def _rest_candidates(nb, nc, h, clus, fsc, gravity):
         w2 = (clus.cl_w[b, 0] ** 2 + clus.cl_w[b, 1] ** 2 + clus.cl_w[b, 2] ** 2) * r * r
         e2 = e3 = 0.0  # at the step's end
         for k in range(3):
-            e2 += (clus.cl_v[b, k] + h * clus.cl_a[b, k]) ** 2
-            e3 += (clus.cl_w[b, k] + h * clus.cl_al[b, k]) ** 2 * r * r
+            e2 += clus.cl_a[b, k] ** 2
+            e3 += clus.cl_al[b, k] ** 2 * r * r
         if v2 <= v_land * v_land and w2 <= v_land * v_land and e2 <= v_still * v_still \
                 and e3 <= v_still * v_still:
             clus.cl_depth[b] = -1
@@ -584,6 +601,32 @@ def _rest_candidates(nb, nc, h, clus, fsc, gravity):
             if up < 0.0 and b >= 0 and clus.cl_depth[b] < 0 and clus.cl_depth[a] >= 0:
                 clus.cl_depth[b] = 0
                 changed = True
+
+
+@njit
+def _hold_rests(nb, nc, clus):
+    """If a body that comes to rest (:func:`_rest_candidates`) shares a persisting contact with
+    one that goes on moving, the moving one was solved as if its partner went on with the
+    partner's (slight) motion: hold every resting body still (immovable, at rest at the step's
+    end) so that the step can be solved again, from the forces it has; returns whether it
+    must be. (Halted after the solve instead, a resting body would leave the moving one
+    closing on it by up to its standstill speed: a contact at once, again and again.)"""
+    mixed = False
+    for c in range(nc):
+        b = clus.ck_b[c]
+        if clus.ck_tgt[c] != NO_CONTACT and b >= 0 and \
+                (clus.cl_depth[clus.ck_a[c]] < 0) != (clus.cl_depth[b] < 0):
+            mixed = True
+            break
+    if mixed:
+        for b in range(nb):
+            if clus.cl_depth[b] < 0:
+                clus.cl_inv_m[b] = 0.0
+                clus.cl_inv_i[b] = 0.0
+                for k in range(3):
+                    clus.cl_a[b, k] = 0.0
+                    clus.cl_al[b, k] = 0.0
+    return mixed
 
 
 @njit
@@ -720,19 +763,16 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     h = _segment_time(nc, clus, MAX_SEGMENT, False, t)
     _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation, friction,
                 rolling)
-    sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
-                                   friction, rolling, SOLVE_TOL_REL * space.slack[0])
-    _count(isc, sweeps, nc, True)
-    if worst > space.slack[0]:
-        isc[I_UNSOLVED] += 1
-        _unsolved_step(nb, nc, h, clus, isc, space, rotation)
-    else:
+    solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling)
+    _rest_candidates(nb, nc, clus, fsc, space.gravity)
+    if solved and _hold_rests(nb, nc, clus):
+        solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling)
+    if solved:
         _warm_store(nb, nc, h, clus)
     _accelerations(nb, h, clus)
     tau = _segment_time(nc, clus, h, True, t)
     if tau <= MIN_SEGMENT_REL * max(1.0, t):
         isc[I_SHORT] += 1
-    _rest_candidates(nb, nc, h, clus, fsc, space.gravity)
     loss += _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, isc,
                           pair_table, fsc, flags)
     fsc[F_CLUSTER_LOSS] += loss

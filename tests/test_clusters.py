@@ -95,6 +95,52 @@ def test_sphere_sliding_down_a_frictionless_slope_comes_to_rest_in_the_corner():
     np.testing.assert_allclose(sim.pos[0], (xc, 0.0, zc), atol=1e-9 * R)
 
 
+def _corner_case(seed):
+    """A sphere let go above an incline (θ) that ends against a vertical wall at x = 0: every
+    parameter drawn from ``seed`` (the single-sphere corners of tools/robustness.py's incline
+    kind, where the pairwise rules stopped at the guard in 16 of 20 such draws)."""
+    rng = np.random.default_rng(seed)
+    th = math.radians(rng.uniform(2.0, 40.0))
+    e, mu = rng.uniform(0.1, 0.95), rng.uniform(0.05, 0.8)
+    x0 = rng.uniform(3.0, 15.0) * R
+    start = (x0, 0.0, math.tan(th) * x0 + R / math.cos(th) + rng.uniform(0.0, 5.0) * R)
+    incline = plane(("0.0", "0.0", "0.0"), (num(-math.sin(th)), "0.0", num(math.cos(th))))
+    wall = plane(("0.0", "0.0", "0.0"), ("1.0", "0.0", "0.0"))
+    body = incline + wall + sphere(tuple(num(c) for c in start),
+                                   (num(rng.uniform(-0.1, 0.1)), "0.0", "0.0"))
+    return th, scene(body, duration=1.0, mu=mu, e=e)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_sphere_rolling_down_an_incline_into_a_wall_comes_to_rest_in_the_corner(seed):
+    """Whatever the incline, restitution and friction, the sphere bounces and rolls down into
+    the corner and comes to rest there, R from the wall and R from the incline."""
+    th, sc = _corner_case(seed)
+    sim = Simulation(sc)
+    sim.run()
+    assert sim.mstate[0] == MS_REST
+    np.testing.assert_allclose(sim.pos[0], (R, 0.0, (R + R * math.sin(th)) / math.cos(th)),
+                               atol=1e-9 * R)
+
+
+def test_sphere_rolling_off_a_resting_sphere_never_overlaps_it():
+    """A sphere let go on the shoulder of another resting on a plate rolls off it: the one
+    below comes to rest while the other still moves on it (a solve that halts one partner of
+    a moving contact must keep the other from closing on it), without a zero-time sequence
+    and without an overlap beyond 1e-9 σ."""
+    ang = math.radians(25.0)
+    top = (2 * R * math.sin(ang), 0.0, R + 2 * R * math.cos(ang))
+    body = FLOOR + sphere(("0.0", "0.0", num(R))) + sphere(tuple(num(c) for c in top))
+    sim = Simulation(scene(body, duration=0.05))
+    worst = 0.0
+    while sim.time < 0.05:
+        sim.run(max_collisions=20)
+        pos, _ = sim.state_at(sim.time)
+        worst = max(worst, (2 * R - np.linalg.norm(pos[1] - pos[0])) / (2 * R))
+    assert worst <= 1e-9
+    assert sim.pos[1, 2] < top[2] - 0.1 * R  # it has come down off the top
+
+
 def test_stack_of_three_on_a_plate_stays_at_rest():
     """Three spheres stacked on a plate, touching, stay where they are."""
     body = FLOOR + "".join(sphere(("0.0", "0.0", num((2 * k + 1) * R))) for k in range(3))

@@ -40,6 +40,19 @@ from hsgran._jit import njit
 #: contacts along one line (Newton's cradle, a column) are the slowest case, needing sweeps of
 #: the order of the square of their length.
 MAX_SWEEPS = 20000
+#: Sweeps that friction and rolling couples get before :func:`solve_polished` freezes them and
+#: polishes the normal impulses alone [-]. Where a cluster holds a slowly slipping mode (spheres
+#: creeping at the edge of their cones), Gauss–Seidel approaches the tangential solution only
+#: as 1/sweeps: on a 30-sphere impact cluster of a pour, the normal velocities were 8e-7 m/s
+#: from their targets after 200 sweeps and 3e-8 m/s after 2000, where a normal-only polish
+#: reached 5e-14 m/s in about 100 sweeps. Cut at 200, the tangential residue (1e-5 m/s) kept a
+#: 60-sphere pile creeping: it never came to rest; at 2000 it comes to rest as with converged
+#: friction (docs/enduring-contact.md).
+FRICTION_SWEEPS = 2000
+#: Rounds of (normal polish, cones clipped) in :func:`solve_polished` [-]: each clip changes
+#: the impulses by what the polish before it moved the normals, a fraction of a per cent of
+#: the cones; two rounds leave it at the rounding of the impulses.
+POLISH_ROUNDS = 3
 
 
 @njit(inline="always")
@@ -275,4 +288,59 @@ def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, i
                                     rotation) <= tol:
             break
     worst = _worst(nc, ca, cb, cn, crb, cvb, target, rad, v, w, rotation)
+    return sweeps, worst
+
+
+@njit
+def _clip_cones(nc, ca, cb, cn, crb, mu, mur, reff, inv_m, inv_i, rad, v, w, pn, pt, hr,
+                rotation, friction, rolling):
+    """Bring every tangential impulse back into its cone (|P_t| ≤ μ P_n) and every rolling
+    couple within μ_r R* P_n, applying the changes to ``v`` and ``w`` (the arguments as in
+    :func:`solve`). Returns the largest change [N s]."""
+    most = 0.0
+    for k in range(nc):
+        if friction:
+            tx, ty, tz = pt[k, 0], pt[k, 1], pt[k, 2]
+            qx, qy, qz = cap(tx, ty, tz, mu[k] * pn[k])
+            if qx != tx or qy != ty or qz != tz:
+                pt[k, 0], pt[k, 1], pt[k, 2] = qx, qy, qz
+                _apply(k, qx - tx, qy - ty, qz - tz, ca, cb, cn, crb, inv_m, inv_i, rad, v, w,
+                       rotation)
+                most = max(most, math.sqrt((qx - tx) ** 2 + (qy - ty) ** 2 + (qz - tz) ** 2))
+        if rolling and rotation:
+            hx, hy, hz = hr[k, 0], hr[k, 1], hr[k, 2]
+            gx, gy, gz = cap(hx, hy, hz, mur[k] * reff[k] * pn[k])
+            if gx != hx or gy != hy or gz != hz:
+                hr[k, 0], hr[k, 1], hr[k, 2] = gx, gy, gz
+                _apply_couple(k, gx - hx, gy - hy, gz - hz, ca, cb, inv_i, w)
+    return most
+
+
+@njit
+def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, inv_i,
+                   rad, v, w, pn, pt, hr, rotation, friction, rolling, tol,
+                   friction_sweeps=FRICTION_SWEEPS):
+    """:func:`solve` (the same arguments and results) with friction and rolling couples given
+    at most ``friction_sweeps`` sweeps; if they have not converged by then, they are frozen and
+    the normal impulses alone are solved to ``tol`` (a convex problem, on which Gauss–Seidel
+    converges), then the cones clipped where the new normal impulses no longer hold the
+    frozen tangential ones, up to POLISH_ROUNDS times. The normal conditions (what keeps
+    contacts from closing) are then met to ``tol``; friction is Coulomb's, at the accuracy the
+    tangential sweeps reached."""
+    sweeps, worst = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m,
+                          inv_i, rad, v, w, pn, pt, hr, rotation, friction, rolling, tol,
+                          friction_sweeps if (friction or rolling) else MAX_SWEEPS)
+    if sweeps < friction_sweeps or not (friction or rolling):
+        return sweeps, worst  # converged (or nothing tangential to freeze)
+    for _ in range(POLISH_ROUNDS):
+        more, worst = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m,
+                            inv_i, rad, v, w, pn, pt, hr, rotation, False, False, tol)
+        sweeps += more
+        if _clip_cones(nc, ca, cb, cn, crb, mu, mur, reff, inv_m, inv_i, rad, v, w, pn, pt, hr,
+                       rotation, friction, rolling) == 0.0:
+            break
+    else:
+        more, worst = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m,
+                            inv_i, rad, v, w, pn, pt, hr, rotation, False, False, tol)
+        sweeps += more
     return sweeps, worst
