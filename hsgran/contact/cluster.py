@@ -49,9 +49,9 @@ MAX_SWEEPS = 20000
 #: 60-sphere pile creeping: it never came to rest; at 2000 it comes to rest as with converged
 #: friction (docs/enduring-contact.md).
 FRICTION_SWEEPS = 2000
-#: Rounds of (normal polish, cones clipped) in :func:`solve_polished` [-]: each clip changes
-#: the impulses by what the polish before it moved the normals, a fraction of a per cent of
-#: the cones; two rounds leave it at the rounding of the impulses.
+#: At most this many rounds of (normal polish, cones clipped) in :func:`solve_polished` [-]:
+#: each clip changes a tangential impulse by what the polish before it changed the normal one
+#: (0.15 % of the cone in the pour's cluster above), and a last polish follows the last clip.
 POLISH_ROUNDS = 3
 
 
@@ -296,7 +296,8 @@ def _clip_cones(nc, ca, cb, cn, crb, mu, mur, reff, inv_m, inv_i, rad, v, w, pn,
                 rotation, friction, rolling):
     """Bring every tangential impulse back into its cone (|P_t| ≤ μ P_n) and every rolling
     couple within μ_r R* P_n, applying the changes to ``v`` and ``w`` (the arguments as in
-    :func:`solve`). Returns the largest change [N s]."""
+    :func:`solve`). Returns the largest change of a tangential impulse [N s] (a rolling
+    couple only turns the spheres, which no contact's normal velocity feels)."""
     most = 0.0
     for k in range(nc):
         if friction:
