@@ -655,17 +655,26 @@ def _support(b, nc, clus):
 
 
 @njit
-def _wake(s, t, flight, walls, space, grid, sched, clus, isc):
+def resolve_without(s, t, flight, walls, space, grid, sched, clus, isc):
+    """Sphere s leaves the system at time t [s] (hsgran._outflow): every sphere at rest or in
+    constrained motion that touches it is solved again at once, without it."""
+    _wake(s, t, flight, walls, space, grid, sched, clus, isc, True)
+
+
+@njit
+def _wake(s, t, flight, walls, space, grid, sched, clus, isc, supported=False):
     """Sphere s, at rest before the solve, moves: the resting spheres it touches (outside the
-    cluster) are solved again at once, since s may have carried them."""
+    cluster) are solved again at once, since s may have carried them. With ``supported``
+    (s leaves the system, hsgran._outflow) the spheres in constrained motion that touch it are
+    solved again too."""
     st, mstate = flight.st, flight.mstate
     box_len, periodic = space.box_len, space.periodic
     woken = 0  # (re-predicted after the walk: a prediction overwrites grid.heads)
     for h in range(cell_heads(s, grid, space)):
         q = np.int64(grid.heads[h])
         while q >= 0:
-            if q != s and mstate[q] == MS_REST and clus.cl_loc[q] < 0 \
-                    and flight.seg_code[q] != END_RESOLVE:
+            if q != s and (mstate[q] == MS_REST or (supported and mstate[q] == MS_SUPPORTED)) \
+                    and clus.cl_loc[q] < 0 and flight.seg_code[q] != END_RESOLVE:
                 dx = min_image(st[s, 0] - st[q, 0], 0, box_len, periodic)
                 dy = min_image(st[s, 1] - st[q, 1], 1, box_len, periodic)
                 dz = min_image(st[s, 2] - st[q, 2], 2, box_len, periodic)

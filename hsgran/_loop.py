@@ -62,6 +62,7 @@ from hsgran._observe import (
     close_interval,
     observing,
 )
+from hsgran._outflow import remove_sphere
 from hsgran._predict import predict, predict_fn, prefetch_cells, repredict_later
 from hsgran._riding import END_TAKEOFF, leave_ride, moving_gap
 from hsgran._settling import (
@@ -76,6 +77,7 @@ from hsgran._settling import (
 )
 from hsgran._state import (
     F_DISSIPATED,
+    F_EXITED,
     F_FRAME_DT,
     F_LANDING_SPEED,
     F_T_CUR,
@@ -125,6 +127,7 @@ from hsgran.events.grid import insert, remove, slot_of
 from hsgran.events.kinds import (
     EV_CELL,
     EV_CLUSTER,
+    EV_EXIT,
     EV_FRAME,
     EV_LAND,
     EV_MISS,
@@ -137,7 +140,7 @@ from hsgran.events.kinds import (
 )
 from hsgran.events.kinds import EVENT_NAMES as EVENT_NAMES  # re-exported for hsgran.engine
 from hsgran.motion import NEVER
-from hsgran.onplane import END_NONE, END_RESOLVE, MS_ASLEEP, MS_FLIGHT, MS_REST
+from hsgran.onplane import END_NONE, END_RESOLVE, MS_ABSENT, MS_ASLEEP, MS_FLIGHT, MS_REST
 
 #: Event-log entries one event can write: a collision, and a landing or the wedge stops of
 #: both spheres (or the two spheres of a mutual stop). The log buffer is flushed while it still
@@ -161,9 +164,10 @@ ZERO_TIME_REL = 4e-16
 
 
 @njit(inline="always")
-def _log(out, isc, t, jn, jt, en, kind, i, other, stage, regime):
+def _log(out, st, isc, t, jn, jt, en, kind, i, other, stage, regime):
     """Append one entry to the event log; True when the buffer can no longer take all the
-    entries of one event (LOG_ENTRIES_PER_EVENT): flush it before the next event.
+    entries of one event (LOG_ENTRIES_PER_EVENT): flush it before the next event. Every entry
+    holds sphere i's velocity as it stands after the event (``st``, advanced to t) [m/s].
 
     Collisions log (J_n, J_t, e_n, stage, regime); motion-state changes (``EV_STATE``,
     ``EV_LAND``, ``EV_WEDGE``) log zero impulses, e_n = NaN, the new motion state
@@ -175,6 +179,9 @@ def _log(out, isc, t, jn, jt, en, kind, i, other, stage, regime):
     log_f[m, 1] = jn
     log_f[m, 2] = jt
     log_f[m, 3] = en
+    log_f[m, 4] = st[i, S_V]
+    log_f[m, 5] = st[i, S_V + 1]
+    log_f[m, 6] = st[i, S_V + 2]
     log_i[m, 0] = kind
     log_i[m, 1] = i
     log_i[m, 2] = other
@@ -233,6 +240,19 @@ def _prefetch_next(cal, ev_t, st, cell, n):
     return e
 
 
+@njit
+def _absent_row(f, j, out, grav_on, rotation):
+    """Frame f's row of sphere j, which has left the system: NaN position, velocity and spin,
+    motion state MS_ABSENT (docs/open-systems.md)."""
+    for k in range(3):
+        out.fr_pos[f, j, k] = math.nan
+        out.fr_vel[f, j, k] = math.nan
+        if rotation:
+            out.fr_omg[f, j, k] = math.nan
+    if grav_on:
+        out.fr_ms[f, j] = MS_ABSENT
+
+
 @njit(inline="always")
 def _on_frame(t, flight, dyn, walls, space, sched, out, fsc, isc, counts, flags, grav_on):
     """Frame tick at time t [s]: sample every sphere's flight at t into the frame buffer, leave
@@ -247,7 +267,15 @@ def _on_frame(t, flight, dyn, walls, space, sched, out, fsc, isc, counts, flags,
     n = st.shape[0]
     f = isc[I_N_FRAMES]
     fr_time[f] = t
+    open_system = out.fr_pres.shape[0] > 0  # outlets: spheres may have left
+    if open_system:
+        out.fr_left[f] = fsc[F_EXITED]
     for j in range(n):
+        if open_system:
+            out.fr_pres[f, j] = flight.present[j]
+            if flight.present[j] == 0:
+                _absent_row(f, j, out, grav_on, rotation)
+                continue
         x, y, z, u, v, w = state_at(st, acc, j, t, grav_on)
         fr_pos[f, j, 0] = x
         fr_pos[f, j, 1] = y
@@ -277,8 +305,8 @@ def _on_frame(t, flight, dyn, walls, space, sched, out, fsc, isc, counts, flags,
 
 
 @njit(inline="always")
-def _finish_collision(kind, i, other, t, tc_on, landed, wedged_a, wedged_b, mstate, zstreak,
-                      out, fsc, isc, counts, rec, log_on):
+def _finish_collision(kind, i, other, t, tc_on, landed, wedged_a, wedged_b, st, mstate,
+                      zstreak, out, fsc, isc, counts, rec, log_on):
     """Book an executed collision of sphere i with ``other`` (a sphere, or −1 − w for plane w):
     counts, the energy the collision model took, the collapse guard, and the event log (the
     collision, a landing after it, the spheres it stopped in a wedge). Returns EXECUTED or the
@@ -295,15 +323,15 @@ def _finish_collision(kind, i, other, t, tc_on, landed, wedged_a, wedged_b, msta
             counts[EV_WEDGE] += 1
     if log_on:
         # every entry of the event is written (_log keeps room for them)
-        full = _log(out, isc, t, rec[REC_J_N], rec[REC_J_T], rec[REC_E_N], kind, i, other,
+        full = _log(out, st, isc, t, rec[REC_J_N], rec[REC_J_T], rec[REC_E_N], kind, i, other,
                     int(rec[REC_STAGE]), int(rec[REC_REGIME]))
         if landed:
             # the rebound was too slow: the sphere stays on the plane from now on
-            full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, other, mstate[i],
+            full = _log(out, st, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, other, mstate[i],
                         END_NONE) or full
         for p in (wedged_a, wedged_b):
             if p >= 0:
-                full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_WEDGE, p,
+                full = _log(out, st, isc, t, 0.0, 0.0, math.nan, EV_WEDGE, p,
                             other if p == i else i, mstate[p], END_NONE) or full
         if full:
             return STATUS_LOG_FULL
@@ -344,8 +372,8 @@ def _pair_handler(grav_on):
                 rec, flags) == CL_SOLVED:
             # touching other bodies: solved with them (it re-predicted them all)
             counts[EV_CLUSTER] += 1
-            return _finish_collision(EV_PAIR, i, j, t, False, False, -1, -1, mstate, zstreak, out,
-                                     fsc, isc, counts, rec, log_on)
+            return _finish_collision(EV_PAIR, i, j, t, False, False, -1, -1, st, mstate, zstreak,
+                                     out, fsc, isc, counts, rec, log_on)
         if grav_on:
             # a slow meeting that ends in rest instead of a collision (see _settling.settle)
             rule, who, what = settle(i, j, nx, ny, nz, t, flight, dyn, walls, space.gravity,
@@ -360,10 +388,10 @@ def _pair_handler(grav_on):
                 if rule != SETTLE_SLEEP and _collapsed(isc, zstreak, i, j):
                     return STATUS_COLLAPSE
                 if log_on:
-                    full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, who, what, mstate[who],
-                                END_NONE)
+                    full = _log(out, st, isc, t, 0.0, 0.0, math.nan, EV_LAND, who, what,
+                                mstate[who], END_NONE)
                     if rule == SETTLE_STOP:  # both spheres stopped: an entry for each
-                        full = _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, what, who,
+                        full = _log(out, st, isc, t, 0.0, 0.0, math.nan, EV_LAND, what, who,
                                     mstate[what], END_NONE) or full
                     if full:
                         return STATUS_LOG_FULL
@@ -405,7 +433,7 @@ def _pair_handler(grav_on):
         t_last[i] = t_last[j] = t
         repredict_later(isc, i)
         repredict_later(isc, j)
-        return _finish_collision(EV_PAIR, i, j, t, tc_on, False, wedged_a, wedged_b, mstate,
+        return _finish_collision(EV_PAIR, i, j, t, tc_on, False, wedged_a, wedged_b, st, mstate,
                                  zstreak, out, fsc, isc, counts, rec, log_on)
 
     return on_pair
@@ -447,8 +475,8 @@ def _wall_handler(grav_on):
                 i, -1, w, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
                 rec, flags) == CL_SOLVED:
             counts[EV_CLUSTER] += 1
-            return _finish_collision(EV_WALL, i, -1 - w, t, False, False, -1, -1, mstate, zstreak,
-                                     out, fsc, isc, counts, rec, log_on)
+            return _finish_collision(EV_WALL, i, -1 - w, t, False, False, -1, -1, st, mstate,
+                                     zstreak, out, fsc, isc, counts, rec, log_on)
         if grav_on and lands_before_wall(i, w, t, flight, dyn, walls, space.gravity, pair_table,
                                          fsc, flags):
             counter[i] += 1
@@ -456,7 +484,7 @@ def _wall_handler(grav_on):
             counts[EV_LAND] += 1
             if _collapsed(isc, zstreak, i, -1):
                 return STATUS_COLLAPSE
-            if log_on and _log(out, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, -1 - w, mstate[i],
+            if log_on and _log(out, st, isc, t, 0.0, 0.0, math.nan, EV_LAND, i, -1 - w, mstate[i],
                                END_NONE):
                 return STATUS_LOG_FULL
             return GO_ON
@@ -491,7 +519,7 @@ def _wall_handler(grav_on):
         t_last[i] = t
         repredict_later(isc, i)
         return _finish_collision(EV_WALL, i, -1 - w, t, tc_on, landed, i if wedged else -1, -1,
-                                 mstate, zstreak, out, fsc, isc, counts, rec, log_on)
+                                 st, mstate, zstreak, out, fsc, isc, counts, rec, log_on)
 
     return on_wall
 
@@ -517,7 +545,7 @@ def _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out, pair_tabl
         counts[EV_STATE] += 1
         if _collapsed(isc, zstreak, i, -1):
             return STATUS_COLLAPSE
-        if flags[FL_LOG] and _log(out, isc, t, 0.0, 0.0, math.nan, EV_STATE, i, -1, mstate[i],
+        if flags[FL_LOG] and _log(out, st, isc, t, 0.0, 0.0, math.nan, EV_STATE, i, -1, mstate[i],
                                   ended):
             return STATUS_LOG_FULL
         return GO_ON
@@ -545,10 +573,26 @@ def _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out, pair_tabl
     counts[EV_STATE] += 1
     if _collapsed(isc, zstreak, i, -1):
         return STATUS_COLLAPSE
-    if flags[FL_LOG] and _log(out, isc, t, 0.0, 0.0, math.nan, EV_STATE, i, -1 - w,
+    if flags[FL_LOG] and _log(out, st, isc, t, 0.0, 0.0, math.nan, EV_STATE, i, -1 - w,
                               mstate[i], ended):
         return STATUS_LOG_FULL
     return GO_ON
+
+
+@njit
+def _on_exit(i, t, flight, dyn, walls, space, grid, sched, clus, out, fsc, isc, counts, flags,
+             grav_on, ev_partner):
+    """Sphere i's centre enters outlet ``ev_partner[i]`` at time t [s]: it leaves the system
+    (hsgran._outflow; logged with the velocity it leaves with). Not inlined: it is rare."""
+    st = flight.st
+    note_progress(i, t, st, dyn.zstreak)
+    advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, flags[FL_ROTATION])
+    full = flags[FL_LOG] and _log(out, st, isc, t, 0.0, 0.0, math.nan, EV_EXIT, i,
+                                  ev_partner[i], flight.mstate[i] if grav_on else MS_FLIGHT,
+                                  END_NONE)
+    remove_sphere(i, t, flight, dyn, walls, space, grid, sched, clus, isc, fsc, flags, grav_on)
+    counts[EV_EXIT] += 1
+    return STATUS_LOG_FULL if full else GO_ON
 
 
 @njit(inline="always")
@@ -673,8 +717,11 @@ def _loop_of(grav_on):
                 elif grav_on and kind == EV_STATE:
                     r = _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out,
                                   pair_table, fsc, isc, counts, rec, flags, grav_on, ev_partner)
-                else:  # EV_CELL (EV_NONE has time NEVER and is never popped)
+                elif kind == EV_CELL:  # (EV_NONE has time NEVER and is never popped)
                     r = _on_cell(i, flight, space, grid, isc, counts, ev_partner, large)
+                else:  # EV_EXIT
+                    r = _on_exit(i, t, flight, dyn, walls, space, grid, sched, clus, out, fsc,
+                                 isc, counts, flags, grav_on, ev_partner)
             if r == EXECUTED:
                 executed += 1
                 if executed >= max_collisions:

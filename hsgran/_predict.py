@@ -20,7 +20,7 @@ from hsgran._jit import njit, prefetch
 from hsgran._riding import moving_gap
 from hsgran._state import I_PEND_A, I_PEND_B, I_SEQ, S_R
 from hsgran.events.calendar import calendar_update, has_buckets
-from hsgran.events.kinds import EV_CELL, EV_NONE, EV_PAIR, EV_STATE, EV_WALL
+from hsgran.events.kinds import EV_CELL, EV_EXIT, EV_NONE, EV_PAIR, EV_STATE, EV_WALL
 from hsgran.motion import (
     NEVER,
     cylinder_contact_time,
@@ -31,6 +31,7 @@ from hsgran.motion import (
     plane_gap,
 )
 from hsgran.onplane import MS_FLIGHT, MS_SUPPORTED
+from hsgran.outlets import outlet_entry_time
 from hsgran.wallmotion import moving_plane_contact_time
 from hsgran.wallspec import CY_RADIUS, CY_SIDE, WK_PLANE
 
@@ -253,6 +254,13 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
             best = tau
             kind = EV_WALL
             partner = w
+    outlets = walls.outlets
+    for o in range(outlets.shape[0]):
+        tau = outlet_entry_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], outlets, o)
+        if tau < best:
+            best = tau
+            kind = EV_EXIT
+            partner = o
     # The neighbouring lists and, on periodic axes, which image of their spheres can touch
     # sphere i: the one in the cell next to i's (the nearest image at prediction time is not
     # always the one that touches later). First gather the heads of the lists, then walk them:

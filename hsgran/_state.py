@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from hsgran.outlets import OL_SIZE
 from hsgran.wallspec import CY_SIZE, M_SIZE
 
 #: What a prediction needs of every sphere. ``st``: one 64-byte row per sphere (``S_*`` columns
@@ -30,8 +31,10 @@ from hsgran.wallspec import CY_SIZE, M_SIZE
 #: ``seg_code`` (END_*) of the on-plane motion segment; without gravity, each sphere's earliest
 #: pair contact at its last prediction (``pc_t`` [s], ``pc_partner`` or −1, ``pc_count``: the
 #: partner's counter then), which lets a cell crossing look at the new layer of cells only.
+#: ``present``: with outlets only (docs/open-systems.md), 1 for a sphere in the system and 0
+#: for one that has left (no longer in the grid or the calendar; empty without outlets).
 Flight = namedtuple("Flight", "st counter acc mstate mplane seg_end seg_code pc_t pc_partner "
-                              "pc_count")
+                              "pc_count present")
 #: What a collision needs in addition. ``omg`` spins [rad/s]; ``inv_m`` [1/kg], ``inv_i``
 #: [1/(kg m²)]; ``mat`` material index; ``zstreak`` events in succession without the clock
 #: advancing (collapse guard); ``alpha`` [rad/s²] and ``seg_dir`` (the direction a segment's end
@@ -45,9 +48,10 @@ Dyn = namedtuple("Dyn", "omg inv_m inv_i mat zstreak alpha seg_dir t_last row_tc
 #: and angular velocity [rad/s] (of a moving plane: its velocity at its last collision; of a
 #: cylinder: the normal and surface velocity at its last contact), the prescribed motion
 #: (hsgran.wallspec ``M_*`` columns; kind MOT_FIXED for a fixed plane) and a cylinder's
-#: geometry (``CY_*`` columns).
+#: geometry (``CY_*`` columns); and the outlets, regions where spheres leave the system
+#: (``outlets``: one row of hsgran.outlets ``OL_*`` values each; docs/open-systems.md).
 Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg planes_mot "
-                            "planes_kind planes_cyl")
+                            "planes_kind planes_cyl outlets")
 #: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic; ``slack``: a
 #: touching contact of a sphere in constrained motion (MS_SUPPORTED, hsgran._cluster) whose
 #: normal velocity stays above −slack[0] [m/s] until its segment ends is no contact event (the
@@ -77,10 +81,13 @@ Clus = namedtuple("Clus", "cl_body cl_loc cl_was cl_depth cl_inv_m cl_inv_i cl_r
                           "cl_a cl_al ck_a ck_b ck_q ck_mat ck_n ck_rb ck_vb ck_ab ck_tgt ck_mu "
                           "ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr wm_q wm_f")
 #: Output buffers: frame times [s], positions [m], velocities [m/s], spins [rad/s], the event
-#: log (floats ``log_f``: time, J_n, J_t, e_n; ints ``log_i``: kind, i, j, stage, regime) and
+#: log (floats ``log_f``: time, J_n, J_t, e_n, and sphere i's velocity after the event; ints
+#: ``log_i``: kind, i, j, stage, regime) and
 #: motion states per frame; with observables on, ``fr_obs`` the sums ``obs`` of the interval
-#: each frame closes.
-Out = namedtuple("Out", "fr_time fr_pos fr_vel fr_omg log_f log_i fr_ms fr_obs")
+#: each frame closes; with outlets, ``fr_pres`` whether each sphere is in the system and
+#: ``fr_left`` the energy the spheres that left carried out until the frame (F_EXITED) [J].
+Out = namedtuple("Out", "fr_time fr_pos fr_vel fr_omg log_f log_i fr_ms fr_obs fr_pres "
+                        "fr_left")
 
 #: The groups in the order the loop takes them.
 GROUPS = (Flight, Dyn, Walls, Space, Grid, Sched, Clus, Out)
@@ -118,7 +125,10 @@ F_CHI = 5  #: rolling-torque convention while sliding (hsgran.onplane CONVENTION
 #: sequences of ever-smaller collisions of inelastic collapse in clusters; 0 turns it off
 F_TC_TIME = 6
 F_CLUSTER_LOSS = 7  #: energy the contact clusters took so far [J] (part of F_DISSIPATED)
-F_SIZE = 8
+#: mechanical energy (kinetic and potential, −m g·x) the spheres that left through an outlet
+#: carried out of the system [J] (docs/open-systems.md)
+F_EXITED = 8
+F_SIZE = 9
 # int scalars
 I_SEQ = 0  #: next sequence number (tie-break)
 I_N_FRAMES = 1  #: frames in the buffer
@@ -232,6 +242,7 @@ class Sizes:
     log: int  #: entries in the event-log buffer
     clusters: bool = False  #: contacts are solved as clusters (scratch for them)
     observables: bool = False  #: stress and wall impulses are summed (hsgran._observe)
+    outlets: int = 0  #: outlets (spheres may leave: the system is open)
 
     def value(self, symbol) -> int:
         """The size a shape symbol stands for (an int stands for itself)."""
@@ -258,6 +269,10 @@ class Sizes:
             "on": n if self.observables else 0,
             "ob": obs_size(self.planes) if self.observables else 0,
             "fo": self.frames if self.observables else 0,
+            # an open system: which spheres are present (none without outlets)
+            "outlets": self.outlets,
+            "op": n if self.outlets else 0,
+            "fp": self.frames if self.outlets else 0,
         }[symbol]
 
 
@@ -292,6 +307,7 @@ FIELDS = (
     _f("Flight", "pc_t", "f8", ("c",), fill=np.inf, packed=True),
     _f("Flight", "pc_partner", "i4", ("c",), fill=-1, packed=True),
     _f("Flight", "pc_count", "i8", ("c",), packed=True),
+    _f("Flight", "present", "i1", ("op",), fill=1),
     _f("Dyn", "omg", "f8", ("r", 3)),
     _f("Dyn", "inv_m", "f8", ("m",), packed=True),
     _f("Dyn", "inv_i", "f8", ("m",), packed=True),
@@ -312,6 +328,7 @@ FIELDS = (
     _f("Walls", "planes_mot", "f8", ("planes", M_SIZE)),
     _f("Walls", "planes_kind", "i8", ("planes",)),
     _f("Walls", "planes_cyl", "f8", ("planes", CY_SIZE)),
+    _f("Walls", "outlets", "f8", ("outlets", OL_SIZE)),
     _f("Space", "gravity", "f8", (3,)),
     _f("Space", "box_len", "f8", (3,)),
     _f("Space", "periodic", "?", (3,)),
@@ -370,10 +387,12 @@ FIELDS = (
     _f("Out", "fr_pos", "f8", ("frames", "n", 3)),
     _f("Out", "fr_vel", "f8", ("frames", "n", 3)),
     _f("Out", "fr_omg", "f8", ("fr", "nr", 3)),
-    _f("Out", "log_f", "f8", ("log", 4)),
+    _f("Out", "log_f", "f8", ("log", 7)),
     _f("Out", "log_i", "i8", ("log", 5)),
     _f("Out", "fr_ms", "i1", ("frames", "n")),
     _f("Out", "fr_obs", "f8", ("fo", "ob")),
+    _f("Out", "fr_pres", "i1", ("fp", "op")),
+    _f("Out", "fr_left", "f8", ("fp",)),
 )
 
 

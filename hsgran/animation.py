@@ -236,6 +236,9 @@ class FrameState:
         velocity: Velocities [m/s], shape (N, 3).
         rotation: Orientation of every sphere since t = 0, rotation matrices (N, 3, 3).
         values: Colour variable: speed [m/s] (float) or a category index (int), shape (N,).
+        shown: Whether each sphere is in the system, shape (N,) bool: one that has left
+            through an outlet (or leaves before the next stored frame) is not drawn, and its
+            position and velocity are zeros (docs/open-systems.md).
     """
 
     time: float
@@ -243,6 +246,7 @@ class FrameState:
     velocity: np.ndarray
     rotation: np.ndarray
     values: np.ndarray
+    shown: np.ndarray
 
 
 class Playback:
@@ -277,7 +281,7 @@ class Playback:
         self._wrap = self._period > 0.0
         self._states = motion_states(traj) if color_by == "state" else None
         self._regime_events = _collision_events(traj) if color_by == "regime" else None
-        self.speed_max = (float(np.max(np.linalg.norm(traj.velocity, axis=-1)))
+        self.speed_max = (float(np.nanmax(np.linalg.norm(traj.velocity, axis=-1)))
                           if color_by == "speed" else 0.0)
         self._restart()
 
@@ -330,7 +334,8 @@ class Playback:
     # -- orientation ----------------------------------------------------------------------------
 
     def _omega(self, k: int) -> np.ndarray:
-        return self.traj.angular_velocity[k]
+        # a sphere not in the system (NaN) does not turn
+        return np.nan_to_num(self.traj.angular_velocity[k])
 
     def rotations(self, t: float) -> np.ndarray:
         """Orientation of every sphere at t [s] relative to the first frame, (N, 3, 3)."""
@@ -380,8 +385,12 @@ class Playback:
         integration restarts from the first frame)."""
         rotation = self.rotations(t)
         x, v = self.positions(t)
+        shown = np.isfinite(x).all(axis=1)  # absent spheres have NaN positions
+        if not shown.all():
+            x[~shown] = 0.0
+            v[~shown] = 0.0
         return FrameState(time=t, position=x, velocity=v, rotation=rotation,
-                          values=self.values(t, v))
+                          values=self.values(t, v), shown=shown)
 
     def categories(self) -> dict[int, tuple[str, tuple[float, float, float]]]:
         """Category index → (label, colour) of a categorical colour variable, in legend order
@@ -459,10 +468,10 @@ def _collision_events(traj):
 
 def scene_extent(traj) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper corners [m] of everything the spheres reach (at their radii) and of the
-    box, over all stored frames."""
+    box, over all stored frames (while they are in the system)."""
     r = traj.radius[None, :, None]
-    lower = np.min(traj.position - r, axis=(0, 1))
-    upper = np.max(traj.position + r, axis=(0, 1))
+    lower = np.nanmin(traj.position - r, axis=(0, 1))
+    upper = np.nanmax(traj.position + r, axis=(0, 1))
     if traj.box_lower is not None:
         lower = np.minimum(lower, traj.box_lower)
         upper = np.maximum(upper, traj.box_upper)

@@ -70,8 +70,9 @@ EVENTS_PER_CALL = 200_000
 #: slack ``Space.slack`` and the cluster scalars; 7: the observables' ledger and sums; 8: the
 #: planes' prescribed motions ``planes_mot``; 9: the walls' kinds and the cylinders,
 #: ``planes_kind`` and ``planes_cyl``; 10: the cluster solves' warm-start forces ``wm_q`` and
-#: ``wm_f``).
-CHECKPOINT_VERSION = 10
+#: ``wm_f``; 11: the outlets and each sphere's presence, ``outlets`` and ``present``, and the
+#: energy carried out, ``F_EXITED``).
+CHECKPOINT_VERSION = 11
 
 
 class SimulationError(HsgranError):
@@ -109,6 +110,13 @@ class FrameBlock:
     unresolved_impulse: np.ndarray | None = None
     #: pair and plane collisions (F, 2) int64
     collisions: np.ndarray | None = None
+    # With outlets (else None; docs/open-systems.md): spheres that left have NaN positions,
+    # velocities and spins and motion state hsgran.onplane.MS_ABSENT, and
+    #: each sphere's identifier (its index), −1 while it is not in the system (F, N) int64
+    id: np.ndarray | None = None
+    #: mechanical energy the spheres that left carried out of the system until the frame [J]
+    #: (F,); the dissipated energy does not count it
+    exited: np.ndarray | None = None
 
 
 @dataclass
@@ -124,13 +132,16 @@ class EventBlock:
     e_n: np.ndarray  #: normal restitution [-]
     stage: np.ndarray  #: normal-model stage code (kinds 7, 8, 11: the new motion state)
     regime: np.ndarray  #: tangential regime (kinds 7, 8, 11: what ended the last segment)
+    #: sphere i's velocity right after the event [m/s] (E, 3) (kind 13, exit: the velocity it
+    #: left the system with)
+    velocity: np.ndarray
 
     @classmethod
     def concatenate(cls, blocks) -> EventBlock:
         """One block holding ``blocks`` in order (empty arrays when there are none)."""
         names = cls.__dataclass_fields__
         if not blocks:
-            return cls(**{k: np.zeros(0) for k in names})
+            return cls(**{k: np.zeros((0, 3) if k == "velocity" else 0) for k in names})
         return cls(**{k: np.concatenate([getattr(b, k) for b in blocks]) for k in names})
 
 
@@ -284,6 +295,8 @@ def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
         a["planes_mat"][k] = c.material
         a["planes_kind"][k] = WK_CYLINDER
         a["planes_cyl"][k] = c.row()
+    for k, o in enumerate(scene.outlets):
+        a["outlets"][k] = o.row
     cell = a["cell"][:n]
     cell[:] = cell_coordinates(st[:, es.S_X:es.S_X + 3], a["origin"], a["csize"], a["ncell"],
                                a["periodic"])
@@ -332,7 +345,7 @@ class Simulation:
                                                         FRAME_BUFFER_BYTES // per_frame)),
                       log=LOG_BUFFER if self.log_events else 1,
                       clusters=bool(self.flags[es.FL_CLUSTERS]),
-                      observables=bool(scene.observables))
+                      observables=bool(scene.observables), outlets=len(scene.outlets))
         if large is None:
             large = n >= LARGE_FROM
         a = allocate(sizes, packed=large)
@@ -406,17 +419,29 @@ class Simulation:
         return int(self.isc[es.I_N_EVENTS])
 
     def state_at(self, t: float):
-        """Positions [m] and velocities [m/s] of all spheres at time ``t`` ≥ the last event."""
+        """Positions [m] and velocities [m/s] of all spheres at time ``t`` ≥ the last event
+        (NaN for spheres that have left the system, as in the frames)."""
         dt = (t - self.t_loc)[:, None]
         g = self.acc if self.scene.effects.gravity else self.gravity[None, :]
-        return self.pos + dt * (self.vel + 0.5 * g * dt), self.vel + g * dt
+        pos, vel = self.pos + dt * (self.vel + 0.5 * g * dt), self.vel + g * dt
+        if self.scene.outlets:
+            gone = self.present == 0
+            pos[gone] = np.nan
+            vel[gone] = np.nan
+        return pos, vel
 
-    def _energies(self, pos, vel, omg):
-        """(translational, rotational or None, potential) energy of frames [J], each (F,).
+    def _energies(self, pos, vel, omg, present=None):
+        """(translational, rotational or None, potential) energy of frames [J], each (F,), of
+        the spheres in the system (``present`` (F, N), or all).
 
         Potential energy is −Σ m g·x (zero at the origin); on a periodic axis along which
         gravity acts it jumps when a sphere wraps, and so does the dissipated energy.
         """
+        if present is not None:
+            keep = present[..., None].astype(bool)
+            pos = np.where(keep, pos, 0.0)
+            vel = np.where(keep, vel, 0.0)
+            omg = None if omg is None else np.where(keep, omg, 0.0)
         kin_t = 0.5 * np.einsum("n,fnk,fnk->f", self.mass, vel, vel)
         kin_r = (0.5 * np.einsum("n,fnk,fnk->f", self.inertia, omg, omg)
                  if omg is not None else None)
@@ -433,7 +458,8 @@ class Simulation:
             omg = self.omg + (self.alpha * (t - self.t_loc)[:, None]
                               if self.scene.effects.gravity else 0.0)
         kin_t, kin_r, pot = self._energies(pos[None], vel[None],
-                                           None if omg is None else omg[None])
+                                           None if omg is None else omg[None],
+                                           self.present[None] if self.scene.outlets else None)
         return float(kin_t[0]), None if kin_r is None else float(kin_r[0]), float(pot[0])
 
     def mechanical_energy(self, t: float | None = None) -> float:
@@ -447,10 +473,16 @@ class Simulation:
         hops count negative)."""
         return float(self.fsc[es.F_DISSIPATED])
 
+    @property
+    def exited_energy(self) -> float:
+        """Mechanical energy the spheres that left through an outlet carried out so far [J]
+        (docs/open-systems.md)."""
+        return float(self.fsc[es.F_EXITED])
+
     def dissipated_energy(self, t: float | None = None) -> float:
         """Energy dissipated since t = 0, up to ``t`` [J]: the initial mechanical energy minus
-        that at ``t`` (see :class:`FrameBlock`)."""
-        return self.energy0 - self.mechanical_energy(t)
+        that at ``t`` and what the spheres that left carried out (see :class:`FrameBlock`)."""
+        return self.energy0 - self.mechanical_energy(t) - self.exited_energy
 
     def _call(self, max_collisions: int) -> int:
         """Run the compiled loop for at most ``max_collisions`` collisions and at most
@@ -465,8 +497,11 @@ class Simulation:
         pos = self.fr_pos[:f].copy()
         vel = self.fr_vel[:f].copy()
         omg = self.fr_omg[:f].copy() if self.rotation else None
-        kin_t, kin_r, pot = self._energies(pos, vel, omg)
-        dissipated = self.energy0 - _mechanical(kin_t, kin_r, pot)
+        present = self.fr_pres[:f].astype(bool) if self.scene.outlets else None
+        exited = self.fr_left[:f].copy() if self.scene.outlets else None
+        kin_t, kin_r, pot = self._energies(pos, vel, omg, present)
+        dissipated = self.energy0 - _mechanical(kin_t, kin_r, pot) - (
+            0.0 if exited is None else exited)
         step = np.arange(self._frames_emitted, self._frames_emitted + f, dtype=np.int64)
         self._frames_emitted += f
         self.isc[es.I_N_FRAMES] = 0
@@ -480,6 +515,9 @@ class Simulation:
                 f, planes, 3).copy()
             block.unresolved_impulse = sums[:, -3:].copy()
             block.collisions = np.rint(sums[:, [es.OB_N_PAIR, es.OB_N_WALL]]).astype(np.int64)
+        if present is not None:
+            block.id = np.where(present, np.arange(self.n), -1)
+            block.exited = exited
         return block
 
     def _event_block(self) -> EventBlock | None:
@@ -491,7 +529,7 @@ class Simulation:
         self._events_emitted += m
         return EventBlock(f[:, 0].copy(), i[:, 0].astype(np.int8), i[:, 1].copy(),
                           i[:, 2].copy(), f[:, 1].copy(), f[:, 2].copy(), f[:, 3].copy(),
-                          i[:, 3].astype(np.int8), i[:, 4].astype(np.int8))
+                          i[:, 3].astype(np.int8), i[:, 4].astype(np.int8), f[:, 4:7].copy())
 
     def _state_arrays(self) -> dict:
         """The arrays a checkpoint holds, by field name (views of the live arrays)."""

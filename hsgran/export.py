@@ -63,14 +63,16 @@ def _frames(traj, every: int) -> np.ndarray:
 
 
 def _particle_arrays(traj, states: np.ndarray, f: int) -> dict[str, np.ndarray]:
-    """Per-particle values of frame f (see the module)."""
+    """Per-particle values of frame f (see the module), of the particles in the system then
+    (those that have left through an outlet are not written; ``id`` names the others)."""
+    here = traj.present[f]
     out = {"radius": traj.radius, "velocity": traj.velocity[f],
            "material": traj.material.astype(np.int32),
            "id": np.arange(traj.n_particles, dtype=np.int64),
            "motion_state": states[f].astype(np.int32)}
     if traj.angular_velocity is not None:
         out["angular_velocity"] = traj.angular_velocity[f]
-    return out
+    return {name: values[here] for name, values in out.items()}
 
 
 def _target(path: Path, force: bool) -> None:
@@ -118,7 +120,8 @@ def _write_xyz(traj, states, frames, out: Path, force: bool) -> ExportResult:
     cell = np.zeros(3) if traj.box_lower is None else traj.box_upper - traj.box_lower
     images = []
     for f in frames:
-        atoms = Atoms(symbols=["X"] * traj.n_particles, positions=traj.position[f] / unit,
+        here = traj.present[f]
+        atoms = Atoms(symbols=["X"] * int(here.sum()), positions=traj.position[f][here] / unit,
                       cell=np.diag(cell / unit), pbc=traj.periodic)
         if traj.box_lower is not None:
             atoms.info["origin"] = np.asarray(traj.box_lower, dtype=float) / unit
@@ -153,7 +156,7 @@ def _write_vtk(traj, states, frames, out: Path, force: bool, name: str) -> Expor
     moving = walls_file is not None and _any_moving(traj)
     collection = ET.Element("Collection")
     for k, f in enumerate(frames):
-        cloud = pv.PolyData(np.ascontiguousarray(traj.position[f]))
+        cloud = pv.PolyData(np.ascontiguousarray(traj.position[f][traj.present[f]]))
         for key, values in _particle_arrays(traj, states, f).items():
             cloud.point_data[key] = np.ascontiguousarray(values)
         cloud.field_data["time"] = np.array([traj.time[f]])

@@ -122,12 +122,17 @@ def profiles(trajectory, axis: str = "z", bins: int = 20, *, start: float | None
     r, m = traj.radius, traj.mass
     vol = 4.0 / 3.0 * math.pi * r**3
     per = {name: [] for name in ("phi", "u", "T", "sigma", "mass")}
+    # (a stand-in without the attribute holds only particles in the system)
+    present = getattr(traj, "present", np.ones(traj.position.shape[:2], dtype=bool))
     for f in sel:
-        w = slab_fractions(edges, traj.position[f, :, k], r, period)  # (N, B)
+        # a sphere that has left the system (NaN, docs/open-systems.md) weighs nothing
+        here = present[f]
+        w = slab_fractions(edges, np.where(here, traj.position[f, :, k], lo[k]), r, period)
+        w[~here] = 0.0
         wm = w * m[:, None]
         mass = wm.sum(axis=0)
         safe = np.where(mass > 0.0, mass, 1.0)
-        v = traj.velocity[f]
+        v = np.where(here[:, None], traj.velocity[f], 0.0)
         u = (wm.T @ v) / safe[:, None]
         dv = v[:, None, :] - u[None, :, :]  # (N, B, 3)
         sig = -np.einsum("nb,nbi,nbj->bij", wm, dv, dv) / slab_v[:, None, None]

@@ -52,6 +52,9 @@ MS_ASLEEP = 4
 #: sliding or rolling on spheres or on several walls at once.
 MS_SUPPORTED = 5
 MOTION_STATE_NAMES = ("flight", "sliding", "rolling", "rest", "asleep", "supported")
+#: Output only (trajectory frames): the sphere has left the system through an outlet
+#: (docs/open-systems.md); not an index of MOTION_STATE_NAMES.
+MS_ABSENT = -1
 
 END_NONE = 0  #: the segment lasts until something hits the sphere
 END_SLIP = 1  #: the slip vanishes (C): snap to rolling

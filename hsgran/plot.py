@@ -1,8 +1,9 @@
 """Plots of a trajectory with matplotlib: ``hsgran plot`` (layer 6).
 
 One figure: the energies against time (translational and rotational kinetic energy, the change
-of potential energy since the start, the energy dissipated so far, and their sum, which stays at
-the initial kinetic energy: the dissipated energy is what the mechanical energy lost); and, for
+of potential energy since the start, the energy dissipated so far, with outlets the energy
+carried out of the system, and their sum, which stays at the initial kinetic energy: the
+dissipated energy is what the mechanical energy lost); and, for
 a few particles, their height, speed and spin against time with the collisions and
 motion-state changes of the event log marked on each curve. matplotlib is used through its
 object interface with the Agg canvas, so nothing touches pyplot's global state or needs a
@@ -20,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from hsgran.errors import InputError, MissingDependency
-from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
+from hsgran.events.kinds import EV_EXIT, EV_LAND, EV_PAIR, EV_STATE, EV_WALL, EV_WEDGE
 from hsgran.io.h5md import read_trajectory
 from hsgran.observables import interval_observables
 
@@ -41,7 +42,8 @@ EVENT_MARKERS = ((EV_PAIR, "sphere-sphere collision", "o"),
                  (EV_WALL, "wall collision", "v"),
                  (EV_STATE, "motion-state change", "d"),
                  (EV_LAND, "landing", "s"),
-                 (EV_WEDGE, "stopped in a wedge", "x"))
+                 (EV_WEDGE, "stopped in a wedge", "x"),
+                 (EV_EXIT, "left through an outlet", "*"))
 
 #: Figure of a sweep's results folder when no output is given.
 SWEEP_FIGURE = "summary.png"
@@ -49,7 +51,8 @@ SWEEP_FIGURE = "summary.png"
 ENERGY_CURVES = (("kinetic_energy_translational", "translational kinetic", "C0"),
                  ("kinetic_energy_rotational", "rotational kinetic", "C1"),
                  ("potential_energy", "potential (change since start)", "C2"),
-                 ("dissipated_energy", "dissipated", "C3"))
+                 ("dissipated_energy", "dissipated", "C3"),
+                 ("exited_energy", "carried out through outlets", "C4"))
 
 
 def _import_matplotlib():

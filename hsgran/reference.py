@@ -478,6 +478,8 @@ def run_reference(scene, max_collisions: int | None = None,
     if driven:
         raise ValueError(f"the reference loop has fixed planes only ({driven[0]} is a moving "
                          "plane or a cylinder)")
+    if getattr(scene, "outlets", ()):
+        raise ValueError("the reference loop has a closed system only (the scene has outlets)")
     t_stop = scene.duration if until is None else float(until)
     ref = _Reference(scene)
     log, t_end = ref.run(t_stop, max_collisions)

@@ -682,7 +682,8 @@ class Renderer:
     def _update_meshes(self, frame: FrameState, rgb: np.ndarray) -> None:
         # normals of a unit sphere's vertices are the rotated vertices themselves
         normals = np.einsum("kij,vj->kvi", frame.rotation, self._body)
-        points = (normals * self.traj.radius[:, None, None]
+        radius = self.traj.radius * frame.shown  # a sphere not in the system: a point
+        points = (normals * radius[:, None, None]
                   + frame.position[:, None, :]).reshape(-1, 3)
         self._balls.points[:] = points
         self._balls.point_data["Normals"][:] = normals.reshape(-1, 3)
@@ -696,6 +697,10 @@ class Renderer:
         n = self.traj.n_particles
         self._cloud.points[:] = frame.position
         self._cloud.point_data["rgb"][:] = rgb
+        # a sphere not in the system is a splat of radius 0: not drawn
+        shown = self.traj.radius * frame.shown
+        self._cloud.point_data["radius"][:] = shown
+        self._markers.point_data["radius"][:] = np.tile(shown * MARKER_RADIUS, 2)
         self._cloud.Modified()
         axis = np.asarray(MARKER_AXIS, dtype=float) / np.linalg.norm(MARKER_AXIS)
         offset = (frame.rotation @ axis) * (MARKER_OFFSET * self.traj.radius)[:, None]

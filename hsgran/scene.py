@@ -90,6 +90,7 @@ from hsgran.materials import (
     pair_row,
     solid_sphere_mass,
 )
+from hsgran.outlets import OL_A, OL_B, OL_KIND, OL_SIZE, OUT_BELOW, OUT_BOX, inside_outlet
 from hsgran.overrides import apply_overrides, names_override
 from hsgran.placement import CONTACT_TOLERANCE, Fill, Space, fill_spheres, overlapping_pairs
 from hsgran.system import available_memory
@@ -153,7 +154,7 @@ PARALLEL_TOLERANCE = 1e-12
 AXES = "xyz"
 
 TOP_KEYS = ("scene", "output", "materials", "contacts", "walls", "particles", "fill",
-            "enduring_contact")
+            "enduring_contact", "outlets")
 ENDURING_KEYS = ("landing_speed", "rolling_convention", "tc_time", "treatment")
 #: How touching spheres and walls are treated under gravity (docs/enduring-contact.md): the
 #: pairwise rules of hsgran._settling, or clusters solved together (hsgran._cluster).
@@ -188,6 +189,8 @@ WALL_KINDS = ("plane", "box", "cylinder")
 PARTICLE_KEYS = ("material", "radius", "position", "velocity", "angular_velocity")
 FILL_KEYS = ("count", "material", "radius", "region", "speed", "angular_velocity")
 REGION_KEYS = ("lower", "upper")
+#: Keys of an ``[[outlets]]`` entry by kind (docs/open-systems.md).
+OUTLET_KEYS = {"below": ("kind", "point", "normal"), "box": ("kind", "lower", "upper")}
 
 
 # ---- the scene ---------------------------------------------------------------------------
@@ -265,6 +268,31 @@ class Cylinder:
         return self.radius - rho if self.inside else rho - self.radius
 
 
+@dataclass(frozen=True, eq=False)
+class Outlet:
+    """A region where spheres leave the system: a sphere whose centre enters it is removed
+    (docs/open-systems.md).
+
+    Attributes:
+        row: Its ``hsgran.outlets`` ``OL_*`` values, shape (OL_SIZE,): the kind, then a point
+            of the plane and its unit normal pointing away from the outlet (``below``), or the
+            lower and upper corners (``box``) [m].
+        key: Key path for messages (``outlets[0]``).
+    """
+
+    row: np.ndarray
+    key: str
+
+    @property
+    def kind(self) -> str:
+        """``"below"`` or ``"box"``."""
+        return "below" if int(self.row[OL_KIND]) == OUT_BELOW else "box"
+
+    def contains(self, position: np.ndarray) -> np.ndarray:
+        """Whether points (..., 3) [m] are inside the outlet."""
+        return inside_outlet(self.row, position)
+
+
 @dataclass(eq=False)
 class Scene:
     """A validated scene in SI units.
@@ -303,6 +331,7 @@ class Scene:
             (``[output] observables``, docs/observables.md).
         cylinders: The cylinder walls; the engine's wall rows are ``planes`` then these
             (:attr:`walls`).
+        outlets: Regions where spheres leave the system (:class:`Outlet`).
     """
 
     name: str
@@ -331,6 +360,7 @@ class Scene:
     overrides: dict = field(default_factory=dict)
     observables: bool = False
     cylinders: tuple = ()
+    outlets: tuple = ()
 
     @property
     def walls(self) -> tuple:
@@ -497,6 +527,37 @@ def _vector(value, key: str) -> np.ndarray:
     return np.array([check_number(v, f"{key}[{i}]") for i, v in enumerate(value)])
 
 
+def _length(vector: np.ndarray) -> float:
+    """Euclidean length of a 3-vector, correctly rounded to within an ulp (math.hypot): a unit
+    vector written in a scene stays as written when it is normalised (numpy's norm of
+    (0, 0.28, 0.96) is 1 − 2⁻⁵³ with numpy 2.4, which would move it by an ulp)."""
+    return math.hypot(*(float(v) for v in vector))
+
+
+def _direction(table: dict, name: str, key: str, meaning: str) -> np.ndarray:
+    """The unit vector of ``table[name]`` (a non-zero [x, y, z]; ``meaning`` says what it
+    points to, for the messages)."""
+    vector = _vector(_require(table, name, key, f"[x, y, z] {meaning}"), f"{key}.{name}")
+    length = _length(vector)
+    if length == 0.0 or not math.isfinite(length):
+        raise InputError(f"must be a non-zero vector ({meaning})", f"{key}.{name}")
+    return vector / length
+
+
+def _corners(table: dict, key: str) -> tuple[np.ndarray, np.ndarray]:
+    """``lower`` and ``upper`` of a box [m], upper above lower on every axis."""
+    lower = _vector(_require(table, "lower", key, "lowest corner [x, y, z] in m"),
+                    f"{key}.lower")
+    upper = _vector(_require(table, "upper", key, "highest corner [x, y, z] in m"),
+                    f"{key}.upper")
+    for i in range(3):
+        if not lower[i] < upper[i]:
+            raise InputError(
+                f"must exceed lower on every axis ({AXES[i]}: upper "
+                f"{_fmt(upper[i])} <= lower {_fmt(lower[i])})", f"{key}.upper")
+    return lower, upper
+
+
 def _check_magnitude(vector: np.ndarray, limit: float, unit: str, key: str) -> None:
     """Refuse a vector longer than ``limit`` (see :data:`MAX_SPEED`, :data:`MAX_GRAVITY`)."""
     with np.errstate(over="ignore"):  # 1e300 squared is inf, which is refused below
@@ -628,6 +689,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     library = MaterialLibrary()
     library.add_tables(doc, origin=source)
     walls = _parse_walls(doc, library, head.periodic)
+    outlets = _parse_outlets(doc, head.periodic)
     particles = _parse_particles(doc, library, head.effects)
     fills = _parse_fills(doc, library, head.effects, walls)
     _check_total(len(particles), fills)
@@ -661,6 +723,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
         # placement guarantees both; re-checking all spheres costs little and guards it
         _check_overlaps(spheres.position, spheres.radius, space, names)
         _check_planes(planes + list(cylinders), spheres.position, spheres.radius, names)
+    _check_outlets(outlets, spheres.position, names)
 
     return Scene(
         name=head.name,
@@ -688,6 +751,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
         treatment=enduring.treatment,
         observables=observables,
         cylinders=cylinders,
+        outlets=outlets,
     )
 
 
@@ -798,32 +862,19 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
             _check_keys(w, PLANE_KEYS, key)
             point = _vector(_require(w, "point", key, "a point of the plane [x, y, z] in m"),
                             f"{key}.point")
-            normal = _vector(_require(w, "normal", key, "[x, y, z] pointing to the spheres"),
-                             f"{key}.normal")
-            length = float(np.linalg.norm(normal))
-            if length == 0.0 or not math.isfinite(length):
-                raise InputError("must be a non-zero vector (it points to where the spheres "
-                                 "live)", f"{key}.normal")
+            normal = _direction(w, "normal", key, "pointing to where the spheres live")
             material = _material_name(
                 library, _require(w, "material", key, "a material name"), f"{key}.material")
-            motion = (_parse_motion(w["motion"], f"{key}.motion", normal / length)
+            motion = (_parse_motion(w["motion"], f"{key}.motion", normal)
                       if "motion" in w else None)
             entries.append(dict(kind=kind, key=key, point=point,
-                                normal=normal / length, material=material, motion=motion))
+                                normal=normal, material=material, motion=motion))
         else:
             _check_keys(w, BOX_KEYS, key)
             if box_key is not None:
                 raise InputError(f"a scene has at most one box ({box_key} is one); "
                                  "add further walls as planes", key)
-            lower = _vector(_require(w, "lower", key, "lowest corner [x, y, z] in m"),
-                            f"{key}.lower")
-            upper = _vector(_require(w, "upper", key, "highest corner [x, y, z] in m"),
-                            f"{key}.upper")
-            for i in range(3):
-                if not lower[i] < upper[i]:
-                    raise InputError(
-                        f"must exceed lower on every axis ({AXES[i]}: upper "
-                        f"{_fmt(upper[i])} <= lower {_fmt(lower[i])})", f"{key}.upper")
+            lower, upper = _corners(w, key)
             if "material" in w:
                 material = _material_name(library, w["material"], f"{key}.material")
             elif all(periodic):
@@ -841,13 +892,43 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
     return _Walls(entries, box_lower, box_upper, box_key)
 
 
+def _parse_outlets(doc: dict, periodic: tuple) -> tuple:
+    """The ``[[outlets]]`` entries → :class:`Outlet` values (docs/open-systems.md)."""
+    outlets = []
+    for k, t in enumerate(_array_of_tables(doc, "outlets")):
+        key = f"outlets[{k}]"
+        kind = _string(_require(t, "kind", key, "'below' or 'box'"), f"{key}.kind")
+        if kind not in OUTLET_KEYS:
+            raise InputError(f"unknown outlet kind '{kind}'{did_you_mean(kind, OUTLET_KEYS)}; "
+                             f"known: {', '.join(OUTLET_KEYS)}", f"{key}.kind")
+        _check_keys(t, OUTLET_KEYS[kind], key)
+        row = np.zeros(OL_SIZE)
+        if kind == "below":
+            row[OL_KIND] = OUT_BELOW
+            row[OL_A:OL_A + 3] = _vector(_require(t, "point", key, "a point of the plane "
+                                                  "[x, y, z] in m"), f"{key}.point")
+            normal = _direction(t, "normal", key, "pointing away from the outlet, to the "
+                                "spheres that stay")
+            for i in range(3):
+                if periodic[i] and abs(normal[i]) > PARALLEL_TOLERANCE:
+                    raise InputError(f"must be perpendicular to the periodic axis {AXES[i]} "
+                                     "(a sphere would leave one image and not the next)",
+                                     f"{key}.normal")
+            row[OL_B:OL_B + 3] = normal
+        else:
+            row[OL_KIND] = OUT_BOX
+            row[OL_A:OL_A + 3], row[OL_B:OL_B + 3] = _corners(t, key)
+        outlets.append(Outlet(row, key))
+    return tuple(outlets)
+
+
 def _parse_cylinder(w: dict, key: str, library: MaterialLibrary, periodic: tuple) -> dict:
     """A ``kind = "cylinder"`` entry → its checked values (docs/walls.md, "Cylinders")."""
     _check_keys(w, CYLINDER_KEYS, key)
     center = _vector(_require(w, "center", key, "the middle of its axis [x, y, z] in m"),
                      f"{key}.center")
     axis = _vector(_require(w, "axis", key, "its direction [x, y, z]"), f"{key}.axis")
-    length = float(np.linalg.norm(axis))
+    length = _length(axis)
     if length == 0.0 or not math.isfinite(length):
         raise InputError("must be a non-zero vector (the cylinder's direction)", f"{key}.axis")
     axis = axis / length
@@ -910,7 +991,7 @@ def _parse_motion(tab, key: str, normal: np.ndarray) -> np.ndarray:
     if kind == "oscillation":
         direction = (_vector(tab["direction"], f"{key}.direction") if "direction" in tab
                      else normal)
-        length = float(np.linalg.norm(direction))
+        length = _length(direction)
         if length == 0.0 or not math.isfinite(length):
             raise InputError("must be a non-zero vector", f"{key}.direction")
         row[M_KIND] = MOT_OSCILLATION
@@ -1251,6 +1332,16 @@ def _check_planes(walls: list, position: np.ndarray, radius: np.ndarray,
                 f"{'the plane' if isinstance(plane, Plane) else 'its surface'}, "
                 f"radius {rk} m, beyond the tolerance of {CONTACT_TOLERANCE:g} of the radius; "
                 "the normal points to where spheres live)", names.position_key(k))
+
+
+def _check_outlets(outlets: tuple, position: np.ndarray, names: _Names) -> None:
+    """No sphere starts inside an outlet (it would leave at t = 0: a mistake of the scene)."""
+    for outlet in outlets:
+        bad = np.flatnonzero(outlet.contains(position))
+        if bad.size:
+            k = int(bad[0])
+            raise InputError(f"{names.label(k)} starts inside outlet {outlet.key} (its centre "
+                             "would leave the system at once)", names.position_key(k))
 
 
 def _check_grid(walls: _Walls, periodic: tuple, radius: np.ndarray) -> None:

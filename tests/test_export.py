@@ -3,6 +3,7 @@ pyvista/VTK, and ASE's extended-XYZ reader) with every field equal to the trajec
 
 from __future__ import annotations
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
@@ -77,6 +78,42 @@ def test_extended_xyz_reads_back_in_ase(trajectory, tmp_path):
         assert np.array_equal(atoms.arrays["motion_state"], states[f])
         assert np.array_equal(atoms.arrays["id"], np.arange(traj.n_particles))
         assert tuple(atoms.pbc) == tuple(traj.periodic)
+
+
+@pytest.fixture(scope="module")
+def draining(tmp_path_factory):
+    """An elastic gas that drains through an outlet (docs/open-systems.md)."""
+    from hsgran.scene import parse_scene
+    from tests.test_outlets import GAS
+
+    path = tmp_path_factory.mktemp("export") / "gas.h5"
+    run_scene(parse_scene(GAS.format(duration=0.2)), path)
+    return path
+
+
+def test_particles_that_left_are_not_exported(draining, tmp_path):
+    """Each frame holds the particles in the system then, named by their id."""
+    traj = read_trajectory(draining)
+    here = traj.present
+    assert not here[-1].all()
+    if importlib.util.find_spec("pyvista") is not None:
+        import pyvista as pv
+
+        assert main(["export", str(draining), "--format", "vtk", "-o", str(tmp_path / "v")]) == 0
+        reader = pv.PVDReader(tmp_path / "v" / "gas.pvd")
+        for f, t in enumerate(traj.time):
+            reader.set_active_time_value(t)
+            spheres = reader.read()[0]
+            assert np.array_equal(spheres.point_data["id"], np.flatnonzero(here[f]))
+            assert np.array_equal(spheres.points, traj.position[f][here[f]])
+    if importlib.util.find_spec("ase") is not None:
+        import ase.io
+
+        assert main(["export", str(draining), "--format", "xyz", "-o",
+                     str(tmp_path / "g.xyz")]) == 0
+        images = ase.io.read(tmp_path / "g.xyz", index=":", format="extxyz")
+        for atoms, f in zip(images, range(traj.n_frames), strict=True):
+            assert np.array_equal(atoms.arrays["id"], np.flatnonzero(here[f]))
 
 
 def test_existing_output_bad_format_and_every_are_refused(trajectory, tmp_path, capsys):

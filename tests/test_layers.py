@@ -32,6 +32,8 @@ LAYERS = {
     "wallmotion": 2,
     "wallspec": 1,
     "onplane": 2,
+    "outlets": 2,
+    "_outflow": 5,
     "events.": 3,
     "events.kinds": 3,
     "impact": 4,

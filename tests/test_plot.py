@@ -65,7 +65,7 @@ def write(path, n=2, frames=101, events=True, rotation=True):
                                  i=np.array([0, 0, 0]), j=np.array([1, -1, -1]),
                                  normal_impulse=np.zeros(3), tangential_impulse=np.zeros(3),
                                  e_n=np.array([1.0, 1.0, np.nan]), stage=np.zeros(3, dtype=int),
-                                 regime=np.zeros(3, dtype=int)))
+                                 regime=np.zeros(3, dtype=int), velocity=np.zeros((3, 3))))
     return path
 
 

@@ -234,6 +234,43 @@ def test_still_png_at_a_time(tmp_path):
     np.testing.assert_allclose(centroid(sphere_mask(image)), where, atol=0.5)
 
 
+@needs_gl
+@pytest.mark.parametrize("style", ["mesh", "points"])
+def test_a_sphere_that_has_left_the_system_is_not_drawn(tmp_path, style):
+    """Sphere 1 leaves through an outlet before the last frame (NaN, id −1,
+    docs/open-systems.md): the last picture shows sphere 0 alone."""
+    t = np.array([0.0, 0.1, 0.2])
+    position = np.zeros((3, 2, 3))
+    position[:, 1] = (0.08, 0.0, 0.0)
+    position[2, 1] = np.nan
+    velocity = np.where(np.isnan(position), np.nan, 0.0)
+    zeros = np.zeros(3)
+    path = tmp_path / "left.h5"
+    with TrajectoryWriter(
+            path, radius=np.full(2, RADIUS), mass=np.full(2, 0.03), material=np.zeros(2, int),
+            material_names=["steel"], box_lower=None, box_upper=None,
+            periodic=(False, False, False), angular_velocity=False, scene_text=ONE_SPHERE,
+            effects=[], seed=0, version="test", log_events=False, outlets=True) as writer:
+        writer.append_frames(dict(step=np.arange(3), time=t, position=position,
+                                  velocity=velocity, angular_velocity=None,
+                                  kinetic_translational=zeros, kinetic_rotational=None,
+                                  potential=zeros, dissipated=zeros,
+                                  id=np.array([[0, 1], [0, 1], [0, -1]]), exited=zeros))
+    gone = pixel((0.08, 0.0, 0.0), EYE, FOCAL, SIZE)[0]
+    masks = []
+    for at in ("0.1", "0.2"):
+        still = tmp_path / f"still_{at}.png"
+        hsgran("render", path, "--at", at, "-o", still, "--size", "320x240", "--spheres",
+               style, "--camera", "0.05,-0.3,0.1:0.05,0,0", "--color-by", "material")
+        masks.append(sphere_mask(read_png(still)))
+    rows, cols = np.mgrid[:SIZE[1], :SIZE[0]]
+    near_gone = np.hypot(cols + 0.5 - gone[0], rows + 0.5 - gone[1]) < 4.0
+    assert masks[0][near_gone].all()  # there while it is in the system
+    assert not masks[1][near_gone].any()  # not drawn once it has left
+    np.testing.assert_allclose(centroid(masks[1]), pixel((0.0, 0.0, 0.0), EYE, FOCAL, SIZE)[0],
+                               atol=0.5)
+
+
 def rolling_and_sliding(path):
     """Two spheres, one above the other, at 0.1 m/s along x for 0.1 s: sphere 0 rolls (ω = v/R
     about y, it turns by 1 rad), sphere 1 slides without spin."""

@@ -72,6 +72,10 @@ KINDS = (
               "touching spheres and walls solved together (docs/enduring-contact.md, "
               "\"Clusters of contacts\"); a collision among them is also counted and logged "
               "as pair or wall, with stage −2; a segment's end as state"),
+    EventKind(13, "exit", True,
+              "a sphere's centre enters an outlet and the sphere leaves the system "
+              "(docs/open-systems.md); j the outlet, stage its motion state before, regime 0, "
+              "impulses 0, the velocity the one it left with"),
 )
 
 #: Names of the kinds in code order.

@@ -61,7 +61,7 @@ H5MD_VERSION = (1, 1)
 UNITS_MODULE_VERSION = (1, 0)
 #: Version of hsgran's own layout (``/parameters/hsgran@format_version``); bump it on any change
 #: a reader must know about.
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 PARTICLES = "particles/all"
 OBSERVABLES = "observables"
@@ -120,8 +120,10 @@ class FrameField:
         shape: Shape of one frame's row, :data:`PER_PARTICLE` standing for N and
             :data:`PER_WALL` for the number of planes.
         switch: Argument of :class:`TrajectoryWriter` that turns the field on
-            (``angular_velocity``, ``motion_state``, ``observables``), or ``None`` when every
-            file has it.
+            (``angular_velocity``, ``motion_state``, ``observables``, ``outlets``), or
+            ``None`` when every file has it.
+        fill: The HDF5 fill value of its ``value`` dataset, or ``None`` (``id``: −1 marks a
+            particle that is not in the system, as H5MD 1.1 provides).
     """
 
     path: str
@@ -129,6 +131,7 @@ class FrameField:
     dtype: type
     shape: tuple
     switch: str | None = None
+    fill: int | float | None = None
 
     def row_shape(self, n_particles: int, n_walls: int = 0) -> tuple:
         """Shape of one frame's row for ``n_particles`` particles and ``n_walls`` planes."""
@@ -164,6 +167,11 @@ FRAME_FIELDS = {
     "unresolved_impulse": FrameField(f"{OBSERVABLES}/unresolved_support_impulse", UNIT_IMPULSE,
                                      np.float64, (3,), "observables"),
     "collisions": FrameField(f"{OBSERVABLES}/collisions", None, np.int64, (2,), "observables"),
+    # with outlets (docs/open-systems.md): each particle's identifier, −1 (the dataset's fill
+    # value) while it is not in the system, and the energy the particles that left carried out
+    "id": FrameField(f"{PARTICLES}/id", None, np.int64, (PER_PARTICLE,), "outlets", fill=-1),
+    "exited": FrameField(f"{OBSERVABLES}/exited_energy", UNIT_ENERGY, np.float64, (),
+                         "outlets"),
 }
 #: The element whose ``step`` and ``time`` datasets every other element links to.
 CLOCK = "position"
@@ -180,7 +188,8 @@ SUM_OBSERVABLES = {
     if spec.path.startswith(OBSERVABLES + "/") and spec.switch == "observables"
 }
 
-#: Event-log datasets: name → (dtype, unit or None).
+#: Event-log datasets: name → (dtype, unit or None); each has one scalar per event, except
+#: those in :data:`EVENT_ROWS`.
 EVENT_FIELDS = {
     "time": (np.float64, UNIT_TIME),
     "kind": (np.int8, None),
@@ -191,7 +200,10 @@ EVENT_FIELDS = {
     "e_n": (np.float64, None),
     "stage": (np.int8, None),
     "regime": (np.int8, None),
+    "velocity": (np.float64, UNIT_VELOCITY),
 }
+#: Event-log datasets with a row per event, by name: the row's shape.
+EVENT_ROWS = {"velocity": (3,)}
 
 #: HDF5 file-format bounds: SWMR needs the 1.10 format (h5py 3 / HDF5 1.10 or newer to read).
 LIBVER = ("v110", "latest")
@@ -280,8 +292,9 @@ class Trajectory:
         box_upper: Upper corner of the box [m], shape (3,), or ``None`` without a box.
         periodic: Periodicity of the x, y, z axes.
         energies: Observable name → values [J], shape (F,): ``kinetic_energy_translational``,
-            ``potential_energy``, ``dissipated_energy`` and, with rotation,
-            ``kinetic_energy_rotational``.
+            ``potential_energy``, ``dissipated_energy``, with rotation
+            ``kinetic_energy_rotational`` and with outlets ``exited_energy`` (carried out by the
+            particles that left).
         events: Event-log field → array, shape (E,), or ``None`` when events were not logged.
         scene_text: The scene file, verbatim.
         effects: Effects of the run.
@@ -304,6 +317,9 @@ class Trajectory:
             (F, W, 3), ``unresolved_support_impulse`` [N s] (F, 3), ``collisions`` (F, 2):
             pair, plane); empty otherwise. :mod:`hsgran.observables` turns them into stress,
             pressure and wall forces.
+        id: With outlets (docs/open-systems.md), each particle's identifier (its index) in
+            every frame, shape (F, N), int64, −1 while it is not in the system (its position,
+            velocity and spin are then NaN); ``None`` otherwise (see :attr:`present`).
     """
 
     time: np.ndarray
@@ -333,6 +349,15 @@ class Trajectory:
     overrides: dict = field(default_factory=dict)
     pair_table: np.ndarray | None = None
     sums: dict[str, np.ndarray] = field(default_factory=dict)
+    id: np.ndarray | None = None
+
+    @property
+    def present(self) -> np.ndarray:
+        """Whether each particle is in the system in each frame, shape (F, N) bool (all, unless
+        the scene has outlets)."""
+        if self.id is None:
+            return np.ones(self.position.shape[:2], dtype=bool)
+        return self.id >= 0
 
     @property
     def n_frames(self) -> int:
@@ -369,6 +394,9 @@ class TrajectoryWriter:
         log_events: Whether to create the event log (:meth:`append_events`).
         creator_args: Command line or arguments of the run, for the record.
         motion_state: Whether frames carry every particle's motion state.
+        observables: Whether frames carry the interval sums (docs/observables.md).
+        outlets: Whether particles may leave the system: frames carry each particle's ``id``
+            (−1 while it is absent) and the energy carried out (docs/open-systems.md).
         checkpoint_layout: Shape and dtype of every checkpoint array by name (two slots are
             preallocated, see :meth:`write_checkpoint`), or ``None`` for no checkpoints.
         overrides: Key path → value changes the scene was run with (JSON-serialisable).
@@ -404,6 +432,7 @@ class TrajectoryWriter:
         creator_args: str = "",
         motion_state: bool = False,
         observables: bool = False,
+        outlets: bool = False,
         checkpoint_layout: dict | None = None,
         overrides: dict | None = None,
         walls: Walls | None = None,
@@ -461,9 +490,11 @@ class TrajectoryWriter:
         self.has_motion_state = bool(motion_state)
         #: The switches of :attr:`FrameField.switch`.
         self.has_observables = bool(observables)
+        self.has_outlets = bool(outlets)
         self._switches = {"angular_velocity": self.has_angular_velocity,
                           "motion_state": self.has_motion_state,
-                          "observables": self.has_observables}
+                          "observables": self.has_observables,
+                          "outlets": self.has_outlets}
         self.has_events = bool(log_events)
         self.has_edges = any(periodic)
         self._edges = None if box_lower is None else box_upper - box_lower
@@ -563,7 +594,7 @@ class TrajectoryWriter:
                 continue
             group = clock if name == CLOCK else self._element(f, spec.path)
             self._values[name] = _create_value(group, spec.row_shape(n, self.n_walls),
-                                               spec.dtype, spec.unit)
+                                               spec.dtype, spec.unit, spec.fill)
 
         box = particles.create_group("box")
         box.attrs["dimension"] = np.int32(3)
@@ -612,7 +643,8 @@ class TrajectoryWriter:
         self._events = None
         if self.has_events:
             events = f.create_group(EVENTS)
-            self._events = {name: _create_series(events, name, dtype, unit)
+            self._events = {name: _create_series(events, name, dtype, unit,
+                                                 EVENT_ROWS.get(name, ()))
                             for name, (dtype, unit) in EVENT_FIELDS.items()}
 
     def _create_checkpoint_slots(self, layout: dict) -> None:
@@ -696,8 +728,9 @@ class TrajectoryWriter:
         """Append a block of E logged events (E may be 0) and flush the file.
 
         Args:
-            events: Every field of :data:`EVENT_FIELDS`, shape (E,), as the attributes of an
-                object (:class:`hsgran.engine.EventBlock`) or the entries of a mapping.
+            events: Every field of :data:`EVENT_FIELDS`, shape (E,) (or (E, *row) for those
+                of :data:`EVENT_ROWS`), as the attributes of an object
+                (:class:`hsgran.engine.EventBlock`) or the entries of a mapping.
 
         Raises:
             ValueError: The writer was created with ``log_events=False`` or is closed, or a
@@ -715,7 +748,7 @@ class TrajectoryWriter:
         if n_new < 0:
             raise ValueError(f"time: expected shape (E,), got {np.shape(given['time'])}")
         arrays = {
-            name: _checked(given[name], name, (n_new,), dtype)
+            name: _checked(given[name], name, (n_new, *EVENT_ROWS.get(name, ())), dtype)
             for name, (dtype, _unit) in EVENT_FIELDS.items()
         }
         if n_new == 0:
@@ -963,10 +996,12 @@ def copy_frames(path, writer: TrajectoryWriter, frames: int, events: int) -> Non
                                       **{name: d[a:b] for name, d in values.items()}})
             if events:
                 group = f[EVENTS]
-                rows = COPY_BYTES // sum(np.dtype(t).itemsize for t, _ in EVENT_FIELDS.values())
+                rows = COPY_BYTES // sum(np.dtype(t).itemsize * int(np.prod(EVENT_ROWS.get(k, ())))
+                                         for k, (t, _) in EVENT_FIELDS.items())
                 for a in range(0, events, rows):
                     b = min(events, a + rows)
-                    writer.append_events({name: group[name][a:b] for name in EVENT_FIELDS})
+                    writer.append_events({name: _event_field(group, name, a, b)
+                                          for name in EVENT_FIELDS})
         except DAMAGED as exc:
             if isinstance(exc, InputError):
                 raise
@@ -1060,8 +1095,8 @@ def _read(f: h5py.File) -> Trajectory:
     events = None
     if EVENTS in f:
         group = f[EVENTS]
-        n_events = min(group[name].shape[0] for name in EVENT_FIELDS)
-        events = {name: group[name][:n_events] for name in EVENT_FIELDS}
+        n_events = min(group[name].shape[0] for name in EVENT_FIELDS if name in group)
+        events = {name: _event_field(group, name, 0, n_events) for name in EVENT_FIELDS}
     return Trajectory(
         time=clock["time"][:n_frames],
         step=clock["step"][:n_frames],
@@ -1107,8 +1142,16 @@ def _read_pair_table(parameters: h5py.Group) -> np.ndarray | None:
 # -- helpers ------------------------------------------------------------------------------
 
 
-def _create_value(group, row_shape, dtype, unit):
-    """The resizable, chunked, compressed ``value`` dataset of a time-dependent element."""
+def _event_field(group, name: str, a: int, b: int) -> np.ndarray:
+    """Rows a:b of an event-log dataset; a ``velocity`` that a file of format 1 lacks is NaN."""
+    if name not in group and name in EVENT_ROWS:
+        return np.full((b - a, *EVENT_ROWS[name]), np.nan)
+    return group[name][a:b]
+
+
+def _create_value(group, row_shape, dtype, unit, fill=None):
+    """The resizable, chunked, compressed ``value`` dataset of a time-dependent element
+    (``fill``: its HDF5 fill value, or ``None``)."""
     row_bytes = int(np.prod(row_shape, dtype=np.int64)) * np.dtype(dtype).itemsize
     rows = max(1, min(SERIES_CHUNK_ROWS, CHUNK_BYTES // max(row_bytes, 1)))
     dset = group.create_dataset(
@@ -1119,21 +1162,22 @@ def _create_value(group, row_shape, dtype, unit):
         chunks=(rows, *row_shape),
         compression=COMPRESSION,
         shuffle=True,
+        fillvalue=fill,
     )
     if unit is not None:
         _set_unit(dset, unit)
     return dset
 
 
-def _create_series(group, name: str, dtype, unit):
-    """A resizable, chunked, compressed 1-D dataset that grows by appends (step, time, the
-    event log)."""
+def _create_series(group, name: str, dtype, unit, row=()):
+    """A resizable, chunked, compressed dataset that grows by appends along its first axis
+    (step, time, the event log; ``row``: the shape of one entry)."""
     dset = group.create_dataset(
         name,
-        shape=(0,),
-        maxshape=(None,),
+        shape=(0, *row),
+        maxshape=(None, *row),
         dtype=dtype,
-        chunks=(SERIES_CHUNK_ROWS,),
+        chunks=(SERIES_CHUNK_ROWS, *row),
         compression=COMPRESSION,
         shuffle=True,
     )

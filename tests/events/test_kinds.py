@@ -17,7 +17,8 @@ DOC = ROOT / "docs" / "trajectory-format.md"
 
 #: The codes that files, tools and the run summary already use: they must never move.
 KNOWN_CODES = {"none": 0, "pair": 1, "wall": 2, "cell": 3, "frame": 4, "stale": 5, "miss": 6,
-               "state": 7, "land": 8, "tc": 9, "hop": 10, "wedge": 11, "cluster": 12}
+               "state": 7, "land": 8, "tc": 9, "hop": 10, "wedge": 11, "cluster": 12,
+               "exit": 13}
 
 
 def test_codes_are_positions_in_the_table_and_never_move():
