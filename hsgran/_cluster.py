@@ -656,7 +656,7 @@ def _support(b, nc, clus):
 
 @njit
 def resolve_without(s, t, flight, walls, space, grid, sched, clus, isc):
-    """Sphere s leaves the system at time t [s] (hsgran._outflow): every sphere at rest or in
+    """Sphere s leaves the system at time t [s] (hsgran._exchange): every sphere at rest or in
     constrained motion that touches it is solved again at once, without it."""
     _wake(s, t, flight, walls, space, grid, sched, clus, isc, True)
 
@@ -665,7 +665,7 @@ def resolve_without(s, t, flight, walls, space, grid, sched, clus, isc):
 def _wake(s, t, flight, walls, space, grid, sched, clus, isc, supported=False):
     """Sphere s, at rest before the solve, moves: the resting spheres it touches (outside the
     cluster) are solved again at once, since s may have carried them. With ``supported``
-    (s leaves the system, hsgran._outflow) the spheres in constrained motion that touch it are
+    (s leaves the system, hsgran._exchange) the spheres in constrained motion that touch it are
     solved again too."""
     st, mstate = flight.st, flight.mstate
     box_len, periodic = space.box_len, space.periodic

@@ -35,6 +35,7 @@ import numpy as np
 
 from hsgran._cluster import CL_SOLVED, cluster_collision, cluster_resolve
 from hsgran._cylinder import enter_cylinder, set_cylinder_contact, track_before
+from hsgran._exchange import absent, remove_sphere
 from hsgran._flight import (
     MAX_ZERO_TIME_EVENTS,
     PLANE_TOUCHING_REL,
@@ -62,7 +63,6 @@ from hsgran._observe import (
     close_interval,
     observing,
 )
-from hsgran._outflow import remove_sphere
 from hsgran._predict import predict, predict_fn, prefetch_cells, repredict_later
 from hsgran._riding import END_TAKEOFF, leave_ride, moving_gap
 from hsgran._settling import (
@@ -77,6 +77,7 @@ from hsgran._settling import (
 )
 from hsgran._state import (
     F_DISSIPATED,
+    F_ENTERED,
     F_EXITED,
     F_FRAME_DT,
     F_LANDING_SPEED,
@@ -203,6 +204,8 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
         # landing speed, pressed on by gravity) start in an on-wall state (a moving plane is
         # where it is at t = 0: s(0) = 0)
         for i in range(st.shape[0]):
+            if absent(flight, i):
+                continue
             for w in range(planes_p.shape[0]):
                 gap = wall_gap(i, w, st, walls)
                 gn, vn = pressed(i, w, 0.0, st, walls, space.gravity)
@@ -211,7 +214,8 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
                     enter_plane(i, w, 0.0, no_end, flight, dyn, walls, space.gravity,
                                  pair_table, fsc, friction, rolling, rotation)
     for i in range(st.shape[0]):
-        predict_fn(i, 0.0, flight, walls, space, grid, sched, isc, grav_on)
+        if not absent(flight, i):  # (an inflow's spheres wait for it, out of the calendar)
+            predict_fn(i, 0.0, flight, walls, space, grid, sched, isc, grav_on)
     calendar_build(sched.cal, sched.ev_t, sched.ev_seq, 0.0)
 
 @njit(inline="always")
@@ -242,8 +246,8 @@ def _prefetch_next(cal, ev_t, st, cell, n):
 
 @njit
 def _absent_row(f, j, out, grav_on, rotation):
-    """Frame f's row of sphere j, which has left the system: NaN position, velocity and spin,
-    motion state MS_ABSENT (docs/open-systems.md)."""
+    """Frame f's row of sphere j, which is not in the system (it left, or has not entered
+    yet): NaN position, velocity and spin, motion state MS_ABSENT (docs/open-systems.md)."""
     for k in range(3):
         out.fr_pos[f, j, k] = math.nan
         out.fr_vel[f, j, k] = math.nan
@@ -267,9 +271,10 @@ def _on_frame(t, flight, dyn, walls, space, sched, out, fsc, isc, counts, flags,
     n = st.shape[0]
     f = isc[I_N_FRAMES]
     fr_time[f] = t
-    open_system = out.fr_pres.shape[0] > 0  # outlets: spheres may have left
+    open_system = out.fr_pres.shape[0] > 0  # spheres may have left or not yet entered
     if open_system:
         out.fr_left[f] = fsc[F_EXITED]
+        out.fr_in[f] = fsc[F_ENTERED]
     for j in range(n):
         if open_system:
             out.fr_pres[f, j] = flight.present[j]
@@ -583,7 +588,7 @@ def _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out, pair_tabl
 def _on_exit(i, t, flight, dyn, walls, space, grid, sched, clus, out, fsc, isc, counts, flags,
              grav_on, ev_partner):
     """Sphere i's centre enters outlet ``ev_partner[i]`` at time t [s]: it leaves the system
-    (hsgran._outflow; logged with the velocity it leaves with). Not inlined: it is rare."""
+    (hsgran._exchange; logged with the velocity it leaves with). Not inlined: it is rare."""
     st = flight.st
     note_progress(i, t, st, dyn.zstreak)
     advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, flags[FL_ROTATION])

@@ -31,8 +31,9 @@ from hsgran.wallspec import CY_SIZE, M_SIZE
 #: ``seg_code`` (END_*) of the on-plane motion segment; without gravity, each sphere's earliest
 #: pair contact at its last prediction (``pc_t`` [s], ``pc_partner`` or −1, ``pc_count``: the
 #: partner's counter then), which lets a cell crossing look at the new layer of cells only.
-#: ``present``: with outlets only (docs/open-systems.md), 1 for a sphere in the system and 0
-#: for one that has left (no longer in the grid or the calendar; empty without outlets).
+#: ``present``: with outlets or inflows only (docs/open-systems.md), 1 for a sphere in the
+#: system and 0 for one that has left or not yet entered (not in the grid or the calendar;
+#: empty in a closed system).
 Flight = namedtuple("Flight", "st counter acc mstate mplane seg_end seg_code pc_t pc_partner "
                               "pc_count present")
 #: What a collision needs in addition. ``omg`` spins [rad/s]; ``inv_m`` [1/kg], ``inv_i``
@@ -84,10 +85,11 @@ Clus = namedtuple("Clus", "cl_body cl_loc cl_was cl_depth cl_inv_m cl_inv_i cl_r
 #: log (floats ``log_f``: time, J_n, J_t, e_n, and sphere i's velocity after the event; ints
 #: ``log_i``: kind, i, j, stage, regime) and
 #: motion states per frame; with observables on, ``fr_obs`` the sums ``obs`` of the interval
-#: each frame closes; with outlets, ``fr_pres`` whether each sphere is in the system and
-#: ``fr_left`` the energy the spheres that left carried out until the frame (F_EXITED) [J].
+#: each frame closes; in an open system, ``fr_pres`` whether each sphere is in the system,
+#: ``fr_left`` the energy the spheres that left carried out until the frame (F_EXITED) and
+#: ``fr_in`` the energy the inserted ones brought in (F_ENTERED) [J].
 Out = namedtuple("Out", "fr_time fr_pos fr_vel fr_omg log_f log_i fr_ms fr_obs fr_pres "
-                        "fr_left")
+                        "fr_left fr_in")
 
 #: The groups in the order the loop takes them.
 GROUPS = (Flight, Dyn, Walls, Space, Grid, Sched, Clus, Out)
@@ -128,7 +130,9 @@ F_CLUSTER_LOSS = 7  #: energy the contact clusters took so far [J] (part of F_DI
 #: mechanical energy (kinetic and potential, −m g·x) the spheres that left through an outlet
 #: carried out of the system [J] (docs/open-systems.md)
 F_EXITED = 8
-F_SIZE = 9
+#: mechanical energy the spheres inserted by inflows brought into the system [J]
+F_ENTERED = 9
+F_SIZE = 10
 # int scalars
 I_SEQ = 0  #: next sequence number (tie-break)
 I_N_FRAMES = 1  #: frames in the buffer
@@ -242,7 +246,8 @@ class Sizes:
     log: int  #: entries in the event-log buffer
     clusters: bool = False  #: contacts are solved as clusters (scratch for them)
     observables: bool = False  #: stress and wall impulses are summed (hsgran._observe)
-    outlets: int = 0  #: outlets (spheres may leave: the system is open)
+    outlets: int = 0  #: outlets
+    open_system: bool = False  #: spheres may leave or enter (outlets or inflows)
 
     def value(self, symbol) -> int:
         """The size a shape symbol stands for (an int stands for itself)."""
@@ -269,10 +274,10 @@ class Sizes:
             "on": n if self.observables else 0,
             "ob": obs_size(self.planes) if self.observables else 0,
             "fo": self.frames if self.observables else 0,
-            # an open system: which spheres are present (none without outlets)
+            # an open system: which spheres are present (none in a closed one)
             "outlets": self.outlets,
-            "op": n if self.outlets else 0,
-            "fp": self.frames if self.outlets else 0,
+            "op": n if self.open_system else 0,
+            "fp": self.frames if self.open_system else 0,
         }[symbol]
 
 
@@ -393,6 +398,7 @@ FIELDS = (
     _f("Out", "fr_obs", "f8", ("fo", "ob")),
     _f("Out", "fr_pres", "i1", ("fp", "op")),
     _f("Out", "fr_left", "f8", ("fp",)),
+    _f("Out", "fr_in", "f8", ("fp",)),
 )
 
 

@@ -79,7 +79,7 @@ def open_writer(path, scene: Scene, sim: Simulation, *, log_events: bool,
         angular_velocity=bool(scene.effects.rotation), scene_text=scene.text,
         effects=list(scene.effects.enabled()), seed=int(scene.seed), version=__version__,
         log_events=log_events, creator_args=creator_args, motion_state=True,
-        observables=scene.observables, outlets=bool(scene.outlets),
+        observables=scene.observables, open_system=scene.open_system,
         checkpoint_layout=sim.checkpoint_layout(), overrides=scene.overrides,
         walls=Walls.of(scene.walls), scene_name=scene.name, pair_table=sim.pair_table)
 

@@ -40,13 +40,15 @@ import numpy as np
 from hsgran import _loop as ev
 from hsgran import _state as es
 from hsgran._cluster import slack
+from hsgran._exchange import enter_sphere
 from hsgran._flight import MAX_ZERO_TIME_EVENTS
 from hsgran._state import FIELDS, Sizes, allocate, groups_of, stored_fields
 from hsgran.contact import compliance, viscous
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.calendar import calendar_build, new_calendar
-from hsgran.events.grid import cell_coordinates, insert_all, plan_grid
+from hsgran.events.grid import cell_coordinates, insert_all, plan_grid, remove, slot_of
+from hsgran.inflow import place_batch
 from hsgran.materials import P_E_FIXED, P_VISC, SOLID_SPHERE_INERTIA
 from hsgran.onplane import CONVENTION_A, CONVENTION_B
 from hsgran.wallspec import WK_CYLINDER, WK_MOVING, cylinder_bounds
@@ -70,8 +72,9 @@ EVENTS_PER_CALL = 200_000
 #: slack ``Space.slack`` and the cluster scalars; 7: the observables' ledger and sums; 8: the
 #: planes' prescribed motions ``planes_mot``; 9: the walls' kinds and the cylinders,
 #: ``planes_kind`` and ``planes_cyl``; 10: the cluster solves' warm-start forces ``wm_q`` and
-#: ``wm_f``; 11: the outlets and each sphere's presence, ``outlets`` and ``present``, and the
-#: energy carried out, ``F_EXITED``).
+#: ``wm_f``; 11: open systems: the outlets and each sphere's presence, ``outlets`` and
+#: ``present``, the energy carried out and brought in, ``F_EXITED`` and ``F_ENTERED``, and the
+#: inflows' progress ``inflow_state``).
 CHECKPOINT_VERSION = 11
 
 
@@ -110,13 +113,16 @@ class FrameBlock:
     unresolved_impulse: np.ndarray | None = None
     #: pair and plane collisions (F, 2) int64
     collisions: np.ndarray | None = None
-    # With outlets (else None; docs/open-systems.md): spheres that left have NaN positions,
+    # With outlets or inflows (else None; docs/open-systems.md): spheres not in the system
+    # (left, or not yet inserted) have NaN positions,
     # velocities and spins and motion state hsgran.onplane.MS_ABSENT, and
     #: each sphere's identifier (its index), −1 while it is not in the system (F, N) int64
     id: np.ndarray | None = None
     #: mechanical energy the spheres that left carried out of the system until the frame [J]
     #: (F,); the dissipated energy does not count it
     exited: np.ndarray | None = None
+    #: mechanical energy the spheres inserted by inflows brought in until the frame [J] (F,)
+    entered: np.ndarray | None = None
 
 
 @dataclass
@@ -247,8 +253,11 @@ def _grid_plan(scene, brute_force: bool):
         upper = np.asarray(scene.box_upper, dtype=np.float64)
     else:
         pos = np.asarray(scene.position, dtype=np.float64)
-        lower = (pos - radius[:, None]).min(axis=0)
-        upper = (pos + radius[:, None]).max(axis=0)
+        lower = np.nanmin(pos - radius[:, None], axis=0, initial=np.inf)
+        upper = np.nanmax(pos + radius[:, None], axis=0, initial=-np.inf)
+        for f in scene.inflows:  # where its spheres will appear (absent rows are NaN)
+            lower = np.minimum(lower, f.lower)
+            upper = np.maximum(upper, f.upper)
         for c in scene.cylinders:  # the spheres inside a cylinder may go anywhere in it
             if c.inside:
                 lo, hi = cylinder_bounds(c.center, c.row())
@@ -297,10 +306,23 @@ def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
         a["planes_cyl"][k] = c.row()
     for k, o in enumerate(scene.outlets):
         a["outlets"][k] = o.row
+    present = _present(scene)
+    if scene.open_system:
+        a["present"][:] = present
     cell = a["cell"][:n]
-    cell[:] = cell_coordinates(st[:, es.S_X:es.S_X + 3], a["origin"], a["csize"], a["ncell"],
-                               a["periodic"])
+    # a sphere not in the system (an inflow's, NaN) is in no cell list
+    cell[:] = cell_coordinates(np.where(present[:, None], st[:, es.S_X:es.S_X + 3], a["origin"]),
+                               a["origin"], a["csize"], a["ncell"], a["periodic"])
     insert_all(cell, a["head"], a["nxt"], a["prv"], a["ncell"])
+    for i in np.flatnonzero(~present):
+        remove(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], a["ncell"]), a["head"], a["nxt"],
+               a["prv"])
+
+
+def _present(scene) -> np.ndarray:
+    """Which spheres are in the system at t = 0 (N,) bool."""
+    return (np.ones(scene.n, dtype=bool) if scene.present is None
+            else np.asarray(scene.present, dtype=bool))
 
 
 class Simulation:
@@ -345,7 +367,8 @@ class Simulation:
                                                         FRAME_BUFFER_BYTES // per_frame)),
                       log=LOG_BUFFER if self.log_events else 1,
                       clusters=bool(self.flags[es.FL_CLUSTERS]),
-                      observables=bool(scene.observables), outlets=len(scene.outlets))
+                      observables=bool(scene.observables), outlets=len(scene.outlets),
+                      open_system=scene.open_system)
         if large is None:
             large = n >= LARGE_FROM
         a = allocate(sizes, packed=large)
@@ -360,7 +383,15 @@ class Simulation:
         self._expose(a, n, calendar)
         #: mechanical energy of the scene as given [J] (before spheres are put on planes)
         self.energy0 = float(_mechanical(*self._energies(
-            self.pos[None], self.vel[None], self.omg[None] if self.rotation else None))[0])
+            self.pos[None], self.vel[None], self.omg[None] if self.rotation else None,
+            _present(scene)[None]))[0])
+        #: each inflow's next batch and the spheres it has inserted (hsgran.inflow)
+        self.inflow_state = np.zeros((len(scene.inflows), 2), dtype=np.int64)
+        #: which spheres have been in the system (the inflows' rows count once inserted)
+        self.entered = (_present(scene) if scene.inflows else np.zeros(0, dtype=bool)).astype(
+            np.int8)
+        # scratch of an insertion: the neighbours of the sphere that enters
+        self._around = np.zeros(n if scene.inflows else 0, dtype=np.int64)
         self.fsc = np.zeros(es.F_SIZE)
         self.fsc[es.F_FRAME_DT] = scene.frame_interval
         self.fsc[es.F_LANDING_SPEED] = scene.effective_landing_speed
@@ -424,7 +455,7 @@ class Simulation:
         dt = (t - self.t_loc)[:, None]
         g = self.acc if self.scene.effects.gravity else self.gravity[None, :]
         pos, vel = self.pos + dt * (self.vel + 0.5 * g * dt), self.vel + g * dt
-        if self.scene.outlets:
+        if self.scene.open_system:
             gone = self.present == 0
             pos[gone] = np.nan
             vel[gone] = np.nan
@@ -459,7 +490,7 @@ class Simulation:
                               if self.scene.effects.gravity else 0.0)
         kin_t, kin_r, pot = self._energies(pos[None], vel[None],
                                            None if omg is None else omg[None],
-                                           self.present[None] if self.scene.outlets else None)
+                                           self.present[None] if self.scene.open_system else None)
         return float(kin_t[0]), None if kin_r is None else float(kin_r[0]), float(pot[0])
 
     def mechanical_energy(self, t: float | None = None) -> float:
@@ -479,10 +510,17 @@ class Simulation:
         (docs/open-systems.md)."""
         return float(self.fsc[es.F_EXITED])
 
+    @property
+    def entered_energy(self) -> float:
+        """Mechanical energy the spheres inserted by inflows brought in so far [J]."""
+        return float(self.fsc[es.F_ENTERED])
+
     def dissipated_energy(self, t: float | None = None) -> float:
-        """Energy dissipated since t = 0, up to ``t`` [J]: the initial mechanical energy minus
-        that at ``t`` and what the spheres that left carried out (see :class:`FrameBlock`)."""
-        return self.energy0 - self.mechanical_energy(t) - self.exited_energy
+        """Energy dissipated since t = 0, up to ``t`` [J]: the initial mechanical energy and
+        what inflows brought in, minus that at ``t`` and what the spheres that left carried out
+        (see :class:`FrameBlock`)."""
+        return (self.energy0 + self.entered_energy - self.mechanical_energy(t)
+                - self.exited_energy)
 
     def _call(self, max_collisions: int) -> int:
         """Run the compiled loop for at most ``max_collisions`` collisions and at most
@@ -497,11 +535,14 @@ class Simulation:
         pos = self.fr_pos[:f].copy()
         vel = self.fr_vel[:f].copy()
         omg = self.fr_omg[:f].copy() if self.rotation else None
-        present = self.fr_pres[:f].astype(bool) if self.scene.outlets else None
-        exited = self.fr_left[:f].copy() if self.scene.outlets else None
+        open_system = self.scene.open_system
+        present = self.fr_pres[:f].astype(bool) if open_system else None
+        exited = self.fr_left[:f].copy() if open_system else None
+        entered = self.fr_in[:f].copy() if open_system else None
         kin_t, kin_r, pot = self._energies(pos, vel, omg, present)
-        dissipated = self.energy0 - _mechanical(kin_t, kin_r, pot) - (
-            0.0 if exited is None else exited)
+        dissipated = self.energy0 - _mechanical(kin_t, kin_r, pot)
+        if open_system:
+            dissipated = dissipated + entered - exited
         step = np.arange(self._frames_emitted, self._frames_emitted + f, dtype=np.int64)
         self._frames_emitted += f
         self.isc[es.I_N_FRAMES] = 0
@@ -515,9 +556,10 @@ class Simulation:
                 f, planes, 3).copy()
             block.unresolved_impulse = sums[:, -3:].copy()
             block.collisions = np.rint(sums[:, [es.OB_N_PAIR, es.OB_N_WALL]]).astype(np.int64)
-        if present is not None:
+        if open_system:
             block.id = np.where(present, np.arange(self.n), -1)
             block.exited = exited
+            block.entered = entered
         return block
 
     def _event_block(self) -> EventBlock | None:
@@ -534,7 +576,8 @@ class Simulation:
     def _state_arrays(self) -> dict:
         """The arrays a checkpoint holds, by field name (views of the live arrays)."""
         arrays = stored_fields(self._groups)
-        arrays.update(fsc=self.fsc, isc=self.isc, counts=self.counts, rec=self.rec)
+        arrays.update(fsc=self.fsc, isc=self.isc, counts=self.counts, rec=self.rec,
+                      inflow_state=self.inflow_state, entered=self.entered)
         return arrays
 
     def checkpoint(self) -> Checkpoint:
@@ -584,6 +627,58 @@ class Simulation:
         calendar_build(sched.cal, sched.ev_t, sched.ev_seq, 0.0)
         self._frames_emitted = int(checkpoint.frames)
         self._events_emitted = int(checkpoint.events)
+
+    def _next_batch(self) -> float:
+        """Time of the next inflow batch [s] (inf without one to come)."""
+        times = [f.batch_time(int(k)) for f, (k, done) in zip(self.scene.inflows,
+                                                            self.inflow_state, strict=True)
+                 if not f.exhausted(int(done))]
+        return min(times, default=math.inf)
+
+    def _insert_batches(self, t: float) -> None:
+        """Insert every inflow batch due at time t [s] (hsgran.inflow): place its spheres
+        clear of the walls and of the spheres in the system, and let them in
+        (hsgran._exchange.enter_sphere)."""
+        scene = self.scene
+        flight, dyn, walls, space, grid, sched = self._groups[:6]
+        grav_on = bool(scene.effects.gravity)
+        self.fsc[es.F_T_CUR] = t
+        for f, state in zip(scene.inflows, self.inflow_state, strict=True):
+            k, done = int(state[0]), int(state[1])
+            if f.exhausted(done) or f.batch_time(k) > t:
+                continue
+            rows = self._waiting_rows(f)[:max(0, f.target(k) - done)]
+            if rows.size == 0:
+                state[0] = k + 1
+                continue
+            pos, _ = self.state_at(t)
+            here = self.present == 1
+            placed, velocity = place_batch(f, k, scene.seed, self.radius[rows], pos[here],
+                                           self.radius[here], scene.space)
+            for i, x, v in zip(rows, placed, velocity, strict=True):
+                if np.isnan(x[0]):
+                    continue  # no room this time: it waits for the next batch
+                if self.present[i]:  # a sphere in the cell lists twice would loop them
+                    raise SimulationError(f"inflow {f.key}: sphere {i} is already in the system")
+                self.state[i, es.S_X:es.S_X + 3] = x
+                self.state[i, es.S_V:es.S_V + 3] = v
+                self.state[i, es.S_T] = t
+                if self.rotation:
+                    self.omg[i] = 0.0
+                enter_sphere(int(i), t, flight, dyn, walls, space, grid, sched, self.isc,
+                             grav_on, self.rotation, self._around)
+                self.entered[i] = 1
+                self.fsc[es.F_ENTERED] += (0.5 * self.mass[i] * float(v @ v)
+                                           - self.mass[i] * float(x @ self.gravity))
+                done += 1
+            state[0], state[1] = k + 1, done
+
+    def _waiting_rows(self, f) -> np.ndarray:
+        """The rows an inflow inserts next, lowest first: its own not yet inserted, or (when
+        recirculating) the spheres that have left."""
+        if not f.recirculate:
+            return f.rows[0] + np.flatnonzero(self.entered[f.rows[0]:f.rows[1]] == 0)
+        return np.flatnonzero((self.present == 0) & (self.entered == 1))
 
     def _checkpoint(self, observers) -> None:
         self._flush(observers)
@@ -654,9 +749,14 @@ class Simulation:
                     budget = min(budget, max_collisions - (self.collisions - done0))
                     if budget <= 0:
                         break
-                # a call ends at the next checkpoint time; cutting the run there changes nothing
-                self.fsc[es.F_T_END] = min(t_end, t_ck)
+                # a call ends at the next checkpoint time, where cutting the run changes
+                # nothing, and at an inflow's next batch (inserted between calls)
+                t_in = self._next_batch()
+                self.fsc[es.F_T_END] = min(t_end, t_ck, t_in)
                 status = self._call(budget)
+                if status == ev.STATUS_DONE and t_in <= min(t_end, t_ck):
+                    self._insert_batches(t_in)
+                    continue
                 if status in (ev.STATUS_FRAMES_FULL, ev.STATUS_LOG_FULL):
                     self._flush(observers)
                 if bar is not None:

@@ -83,6 +83,7 @@ from hsgran.errors import InputError, check_number, check_positive, did_you_mean
 # a periodic axis must hold this many cells of the engine's grid, whose cell edge is at least the
 # largest diameter (with fewer, a sphere and its own image would be neighbours)
 from hsgran.events.grid import MIN_PERIODIC_CELLS
+from hsgran.inflow import Inflow
 from hsgran.materials import (
     PAIR_ROW_SIZE,
     Material,
@@ -154,7 +155,7 @@ PARALLEL_TOLERANCE = 1e-12
 AXES = "xyz"
 
 TOP_KEYS = ("scene", "output", "materials", "contacts", "walls", "particles", "fill",
-            "enduring_contact", "outlets")
+            "enduring_contact", "outlets", "inflow")
 ENDURING_KEYS = ("landing_speed", "rolling_convention", "tc_time", "treatment")
 #: How touching spheres and walls are treated under gravity (docs/enduring-contact.md): the
 #: pairwise rules of hsgran._settling, or clusters solved together (hsgran._cluster).
@@ -189,6 +190,11 @@ WALL_KINDS = ("plane", "box", "cylinder")
 PARTICLE_KEYS = ("material", "radius", "position", "velocity", "angular_velocity")
 FILL_KEYS = ("count", "material", "radius", "region", "speed", "angular_velocity")
 REGION_KEYS = ("lower", "upper")
+#: Keys of an ``[[inflow]]`` entry (docs/open-systems.md); a recirculating one has no count,
+#: material or radius (it inserts the spheres that left).
+INFLOW_KEYS = ("count", "material", "radius", "region", "rate", "interval", "start", "velocity",
+               "speed", "recirculate")
+INFLOW_OWN_KEYS = ("count", "material", "radius")
 #: Keys of an ``[[outlets]]`` entry by kind (docs/open-systems.md).
 OUTLET_KEYS = {"below": ("kind", "point", "normal"), "box": ("kind", "lower", "upper")}
 
@@ -332,6 +338,12 @@ class Scene:
         cylinders: The cylinder walls; the engine's wall rows are ``planes`` then these
             (:attr:`walls`).
         outlets: Regions where spheres leave the system (:class:`Outlet`).
+        inflows: Spheres inserted during the run (:class:`hsgran.inflow.Inflow`); the rows an
+            inflow owns come last in the particle table, absent (NaN position) until inserted.
+        present: Which rows are in the system at t = 0, shape (N,) bool (all but the inflows'
+            rows).
+        space: Where spheres may be placed: the planes, cylinders and periodic box
+            (hsgran.placement), for the inflows.
     """
 
     name: str
@@ -361,6 +373,14 @@ class Scene:
     observables: bool = False
     cylinders: tuple = ()
     outlets: tuple = ()
+    inflows: tuple = ()
+    present: np.ndarray | None = None
+    space: Space | None = None
+
+    @property
+    def open_system(self) -> bool:
+        """Whether spheres may leave or enter (outlets or inflows)."""
+        return bool(self.outlets or self.inflows)
 
     @property
     def walls(self) -> tuple:
@@ -692,13 +712,16 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     outlets = _parse_outlets(doc, head.periodic)
     particles = _parse_particles(doc, library, head.effects)
     fills = _parse_fills(doc, library, head.effects, walls)
-    _check_total(len(particles), fills)
+    inflows = _parse_inflows(doc, library, walls, frame_interval)
+    _check_total(len(particles), [(f.key, f.count) for f in fills]
+                 + [(f["key"], f["count"]) for f in inflows])
     _check_periodic_planes(walls, head.periodic)
-    if len(particles) + sum(f.count for f in fills) == 0:
-        raise InputError("the scene has no particles: add [[particles]] or [[fill]] blocks",
-                         "particles")
+    if len(particles) + sum(f.count for f in fills) + sum(f["count"] for f in inflows) == 0:
+        raise InputError("the scene has no particles: add [[particles]], [[fill]] or "
+                         "[[inflow]] blocks", "particles")
 
-    sphere_materials = _unique([p["material"] for p in particles] + [f.material for f in fills])
+    sphere_materials = _unique([p["material"] for p in particles] + [f.material for f in fills]
+                               + [f["material"] for f in inflows if not f["recirculate"]])
     material_names = _unique(sphere_materials + _wall_materials(walls, head.periodic))
     names = _sphere_names(particles, fills)
     explicit = _explicit_spheres(particles, material_names)
@@ -724,6 +747,10 @@ def _build(doc: dict, text: str, source: str) -> Scene:
         _check_overlaps(spheres.position, spheres.radius, space, names)
         _check_planes(planes + list(cylinders), spheres.position, spheres.radius, names)
     _check_outlets(outlets, spheres.position, names)
+    n_present = spheres.radius.shape[0]
+    inflow_rows, reserve = _reserve_rows(head.seed, inflows, n_present, material_names)
+    _check_inflows(inflow_rows, outlets, spheres.radius)
+    spheres = spheres.then(reserve)
 
     return Scene(
         name=head.name,
@@ -752,6 +779,9 @@ def _build(doc: dict, text: str, source: str) -> Scene:
         observables=observables,
         cylinders=cylinders,
         outlets=outlets,
+        inflows=inflow_rows,
+        present=np.arange(spheres.radius.shape[0]) < n_present,
+        space=space,
     )
 
 
@@ -1177,6 +1207,48 @@ def _explicit_spheres(particles: list[dict], material_names: list[str]) -> _Sphe
 
 # -- [[fill]] --
 
+def _radius_range(table: dict, key: str) -> tuple[float, float]:
+    """(min, max) radius [m] of a ``radius`` key: a number or [min, max]."""
+    r = _require(table, "radius", key, "in m: a number or [min, max]")
+    if isinstance(r, list):
+        if len(r) != 2:
+            raise InputError(f"must be a number or [min, max], got {short_repr(r)}",
+                             f"{key}.radius")
+        r_min = check_positive(r[0], f"{key}.radius[0]", "m")
+        r_max = check_positive(r[1], f"{key}.radius[1]", "m")
+        if r_min > r_max:
+            raise InputError(f"min {_fmt(r_min)} exceeds max {_fmt(r_max)}", f"{key}.radius")
+        return r_min, r_max
+    r = check_positive(r, f"{key}.radius", "m")
+    return r, r
+
+
+def _region(table: dict, key: str, r_max: float, walls: _Walls) -> tuple[np.ndarray, np.ndarray]:
+    """The corners [m] of a ``region = { lower, upper }``: at least one diameter (2 r_max)
+    wide, inside the box if there is one."""
+    region = _table(_require(table, "region", key, "{ lower = [...], upper = [...] }"),
+                    f"{key}.region")
+    _check_keys(region, REGION_KEYS, f"{key}.region")
+    lower = _vector(_require(region, "lower", f"{key}.region", "[x, y, z] in m"),
+                    f"{key}.region.lower")
+    upper = _vector(_require(region, "upper", f"{key}.region", "[x, y, z] in m"),
+                    f"{key}.region.upper")
+    for i in range(3):
+        if upper[i] - lower[i] < 2.0 * r_max:
+            raise InputError(
+                f"region is {_fmt(upper[i] - lower[i])} m wide along {AXES[i]}, less "
+                f"than one sphere diameter ({_fmt(2 * r_max)} m)", f"{key}.region.upper")
+    if walls.box_key is not None:
+        for i in range(3):
+            if lower[i] < walls.box_lower[i] or upper[i] > walls.box_upper[i]:
+                raise InputError(
+                    f"region must lie inside the box {walls.box_key} (along {AXES[i]}: "
+                    f"[{_fmt(lower[i])}, {_fmt(upper[i])}] is not inside "
+                    f"[{_fmt(walls.box_lower[i])}, {_fmt(walls.box_upper[i])}])",
+                    f"{key}.region")
+    return lower, upper
+
+
 def _parse_fills(doc: dict, library: MaterialLibrary, effects: Effects,
                  walls: _Walls) -> list[Fill]:
     fills = []
@@ -1186,38 +1258,8 @@ def _parse_fills(doc: dict, library: MaterialLibrary, effects: Effects,
         count = _count(_require(f, "count", key, "number of spheres"), f"{key}.count")
         material = _particle_material(
             library, _require(f, "material", key, "a material name"), f"{key}.material")
-        r = _require(f, "radius", key, "in m: a number or [min, max]")
-        if isinstance(r, list):
-            if len(r) != 2:
-                raise InputError(f"must be a number or [min, max], got {short_repr(r)}",
-                                 f"{key}.radius")
-            r_min = check_positive(r[0], f"{key}.radius[0]", "m")
-            r_max = check_positive(r[1], f"{key}.radius[1]", "m")
-            if r_min > r_max:
-                raise InputError(f"min {_fmt(r_min)} exceeds max {_fmt(r_max)}",
-                                 f"{key}.radius")
-        else:
-            r_min = r_max = check_positive(r, f"{key}.radius", "m")
-        region = _table(_require(f, "region", key, "{ lower = [...], upper = [...] }"),
-                        f"{key}.region")
-        _check_keys(region, REGION_KEYS, f"{key}.region")
-        lower = _vector(_require(region, "lower", f"{key}.region", "[x, y, z] in m"),
-                        f"{key}.region.lower")
-        upper = _vector(_require(region, "upper", f"{key}.region", "[x, y, z] in m"),
-                        f"{key}.region.upper")
-        for i in range(3):
-            if upper[i] - lower[i] < 2.0 * r_max:
-                raise InputError(
-                    f"region is {_fmt(upper[i] - lower[i])} m wide along {AXES[i]}, less "
-                    f"than one sphere diameter ({_fmt(2 * r_max)} m)", f"{key}.region.upper")
-        if walls.box_key is not None:
-            for i in range(3):
-                if lower[i] < walls.box_lower[i] or upper[i] > walls.box_upper[i]:
-                    raise InputError(
-                        f"region must lie inside the box {walls.box_key} (along {AXES[i]}: "
-                        f"[{_fmt(lower[i])}, {_fmt(upper[i])}] is not inside "
-                        f"[{_fmt(walls.box_lower[i])}, {_fmt(walls.box_upper[i])}])",
-                        f"{key}.region")
+        r_min, r_max = _radius_range(f, key)
+        lower, upper = _region(f, key, r_max, walls)
         speed = check_number(f.get("speed", 0.0), f"{key}.speed")
         if speed < 0.0:
             raise InputError(f"must be >= 0 m/s, got {f['speed']!r}", f"{key}.speed")
@@ -1244,6 +1286,98 @@ def _place_fills(seed: int, fills: list[Fill], explicit: _Spheres, space: Space,
     return spheres
 
 
+def _parse_inflows(doc: dict, library: MaterialLibrary, walls: _Walls,
+                   frame_interval: float) -> list[dict]:
+    """The ``[[inflow]]`` entries → their checked values (docs/open-systems.md)."""
+    inflows = []
+    for k, t in enumerate(_array_of_tables(doc, "inflow")):
+        key = f"inflow[{k}]"
+        _check_keys(t, INFLOW_KEYS, key)
+        recirculate = t.get("recirculate", False)
+        if not isinstance(recirculate, bool):
+            raise InputError(f"must be true or false, got {short_repr(recirculate)}",
+                             f"{key}.recirculate")
+        entry = dict(key=key, index=k, recirculate=recirculate, count=0, material=None,
+                     radius=(0.0, 0.0))
+        if recirculate:
+            for name in INFLOW_OWN_KEYS:
+                if name in t:
+                    raise InputError("a recirculating inflow inserts the spheres that left "
+                                     "through outlets, with their own size and material: "
+                                     f"remove '{name}'", f"{key}.{name}")
+        else:
+            entry["count"] = _count(_require(t, "count", key, "number of spheres"),
+                                    f"{key}.count")
+            entry["material"] = _particle_material(
+                library, _require(t, "material", key, "a material name"), f"{key}.material")
+            entry["radius"] = _radius_range(t, key)
+        entry["lower"], entry["upper"] = _region(t, key, entry["radius"][1], walls)
+        entry["rate"] = check_positive(_require(t, "rate", key, "spheres per second"),
+                                       f"{key}.rate", "1/s")
+        entry["interval"] = check_positive(t.get("interval", frame_interval),
+                                           f"{key}.interval", "s")
+        entry["start"] = check_number(t.get("start", 0.0), f"{key}.start")
+        if entry["start"] < 0.0:
+            raise InputError(f"must be >= 0 s, got {t['start']!r}", f"{key}.start")
+        entry["velocity"] = (_vector(t["velocity"], f"{key}.velocity") if "velocity" in t
+                             else np.zeros(3))
+        _check_magnitude(entry["velocity"], MAX_SPEED, "m/s", f"{key}.velocity")
+        entry["speed"] = check_number(t.get("speed", 0.0), f"{key}.speed")
+        if entry["speed"] < 0.0:
+            raise InputError(f"must be >= 0 m/s, got {t['speed']!r}", f"{key}.speed")
+        _check_magnitude(np.array([entry["speed"]]), MAX_SPEED, "m/s", f"{key}.speed")
+        inflows.append(entry)
+    return inflows
+
+
+def _reserve_rows(seed: int, inflows: list[dict], first: int, material_names: list[str]):
+    """The :class:`~hsgran.inflow.Inflow` of each entry, with the particle table rows it owns
+    from row ``first`` on, and those rows: absent (NaN position, zero velocity), radius drawn
+    uniformly in the entry's range by a generator of the scene's seed and the inflow's index."""
+    made = []
+    rows = []
+    start = first
+    for f in inflows:
+        count = f["count"]
+        r_min, r_max = f["radius"]
+        radius = (np.full(count, r_min) if r_min == r_max
+                  else np.random.default_rng([seed, f["index"]]).uniform(r_min, r_max, count))
+        material = (material_names.index(f["material"]) if f["material"] is not None else 0)
+        rows.append(_Spheres(np.full((count, 3), np.nan), np.zeros((count, 3)),
+                             np.zeros((count, 3)), radius, np.full(count, material, np.int64)))
+        made.append(Inflow(key=f["key"], index=f["index"], rows=(start, start + count),
+                           lower=f["lower"], upper=f["upper"], rate=f["rate"],
+                           interval=f["interval"], start=f["start"], velocity=f["velocity"],
+                           speed=f["speed"], recirculate=f["recirculate"]))
+        start += count
+    empty = _Spheres(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0),
+                     np.zeros(0, np.int64))
+    for r in rows:
+        empty = empty.then(r)
+    return tuple(made), empty
+
+
+def _check_inflows(inflows: tuple, outlets: tuple, radius: np.ndarray) -> None:
+    """A recirculating inflow's region holds the largest sphere; no inflow region reaches into
+    an outlet (its spheres would leave as they arrive)."""
+    for f in inflows:
+        if f.recirculate and radius.size:
+            widest = float(np.min(f.upper - f.lower))
+            if widest < 2.0 * float(radius.max()):
+                raise InputError(f"region is {_fmt(widest)} m wide, less than the diameter of "
+                                 f"the largest sphere it may insert ({_fmt(2 * radius.max())} "
+                                 "m)", f"{f.key}.region")
+        corners = np.array([[(f.lower, f.upper)[(c >> a) & 1][a] for a in range(3)]
+                            for c in range(8)])
+        for o in outlets:
+            reached = (o.contains(corners).any() if o.kind == "below" else
+                       bool(np.all(o.row[OL_A:OL_A + 3] < f.upper)
+                            and np.all(f.lower < o.row[OL_B:OL_B + 3])))
+            if reached:
+                raise InputError(f"region reaches into outlet {o.key} (the spheres it inserts "
+                                 "would leave as they arrive)", f"{f.key}.region")
+
+
 def _sphere_names(particles: list[dict], fills: list[Fill]) -> _Names:
     """Labels of the explicit particles and the index range each fill will take."""
     ranges = []
@@ -1262,15 +1396,15 @@ def _sphere_counts(explicit: _Spheres, fills: list[Fill], material_names: list[s
     return counts
 
 
-def _check_total(n_explicit: int, fills: list[Fill]) -> None:
+def _check_total(n_explicit: int, blocks: list[tuple[str, int]]) -> None:
     """Refuse, before allocating anything, a particle count beyond the hard limit or
-    beyond the memory this machine has available now (the key named is the fill, or the
-    particle list, that crosses the line)."""
+    beyond the memory this machine has available now (the key named is the fill or inflow
+    (``blocks``: key path and count of each), or the particle list, that crosses the line)."""
     available = available_memory()
     budget = math.inf if available is None else MEMORY_SHARE * available
     total = 0
-    for key, count in [("particles", n_explicit)] + [(f"{f.key}.count", f.count)
-                                                      for f in fills]:
+    for key, count in [("particles", n_explicit)] + [(f"{key}.count", count)
+                                                      for key, count in blocks]:
         total += count
         need = total * BYTES_PER_PARTICLE
         if total > MAX_PARTICLES:

@@ -374,3 +374,188 @@ def test_bad_outlets_are_refused_naming_the_key(table, key, needle):
         parse_scene(BASE + "[[outlets]]\n" + table + "\n")
     assert err.value.key == key
     assert needle in str(err.value)
+
+
+# ---- inflow ------------------------------------------------------------------------------
+
+POURED = """
+[scene]
+name = "an inflow into an elastic gas"
+duration = {duration}
+effects = []
+seed = 11
+[output]
+frame_interval = 0.01
+[[walls]]
+kind = "box"
+lower = [0.0, 0.0, 0.0]
+upper = [0.03, 0.03, 0.03]
+material = "steel"
+[[fill]]
+count = 30
+material = "glass"
+radius = 0.0008
+region = {{ lower = [0.0, 0.0, 0.0], upper = [0.03, 0.03, 0.015] }}
+speed = 0.3
+[[inflow]]
+count = {count}
+material = "steel"
+radius = [0.0005, 0.001]
+region = {{ lower = [0.0, 0.0, 0.02], upper = [0.03, 0.03, 0.03] }}
+rate = {rate}
+interval = {interval}
+start = 0.005
+velocity = [0.0, 0.0, -0.2]
+speed = 0.1
+{extra}
+"""
+
+
+def poured(duration=0.2, count=60, rate=500.0, interval=0.01, extra=""):
+    return parse_scene(POURED.format(duration=duration, count=count, rate=rate,
+                                     interval=interval, extra=extra))
+
+
+def test_an_inflow_inserts_its_spheres_at_its_rate_clear_of_the_others():
+    scene = poured()
+    assert scene.n == 90
+    assert not scene.present[30:].any()
+    assert np.isnan(scene.position[30:]).all()
+    sim, keep = run(scene)
+    time, ids, pos = keep.cat("time"), keep.cat("id"), keep.cat("position")
+    # batch k at 0.005 + 0.01 k brings the count up to round(500 × 0.01 × (k + 1)) = 5 (k + 1)
+    inserted = (ids[:, 30:] >= 0).sum(axis=1)
+    expect = np.minimum(60, 5 * np.floor((time - 0.005) / 0.01 + 1).clip(0))
+    np.testing.assert_array_equal(inserted, expect)
+    # once in, a sphere of the inflow stays (no outlet here)
+    assert np.all(np.diff((ids[:, 30:] >= 0).astype(int), axis=0) >= 0)
+    # no overlap in any frame among the spheres in the system
+    radius = sim.radius
+    for f in range(len(time)):
+        here = np.flatnonzero(ids[f] >= 0)
+        p = pos[f, here]
+        d = np.linalg.norm(p[:, None] - p[None], axis=-1)
+        sigma = radius[here, None] + radius[None, here]
+        np.fill_diagonal(d, np.inf)
+        assert np.all(d >= sigma * (1.0 - 1e-9))
+    # elastic: the energy they brought in is kept, nothing is dissipated
+    assert sim.entered_energy > 0.0
+    assert np.all(np.abs(keep.cat("dissipated")) <= 1e-9 * (sim.energy0 + sim.entered_energy))
+
+
+def test_an_inserted_sphere_flies_from_its_batch_on_a_straight_line():
+    """The first frame after its batch shows a sphere where its velocity took it (no
+    gravity; the 5 ms between the batch and the frame are too short to reach anything)."""
+    scene = poured(duration=0.02, extra="")
+    sim, keep = run(scene)
+    time, ids, pos, vel = (keep.cat(n) for n in ("time", "id", "position", "velocity"))
+    f = int(np.flatnonzero(time > 0.005)[0])  # the frame at 0.01 s
+    new = np.flatnonzero(ids[f, 30:] >= 0) + 30
+    assert new.size == 5
+    start = pos[f, new] - vel[f, new] * (time[f] - 0.005)
+    lo, hi = np.array([0.0, 0.0, 0.02]), np.array([0.03, 0.03, 0.03])
+    r = sim.radius[new, None]
+    assert np.all(start >= lo + r - 1e-12)
+    assert np.all(start <= hi - r + 1e-12)
+    np.testing.assert_allclose(np.linalg.norm(vel[f, new] - (0.0, 0.0, -0.2), axis=1), 0.1,
+                               rtol=1e-12)
+
+
+def test_a_crowded_inflow_waits_for_room():
+    """A region with room for a few spheres at a time: the batches insert what fits and the
+    rest waits; never an overlap, and all go in eventually."""
+    scene = parse_scene(POURED.format(duration=0.3, count=30, rate=3000.0, interval=0.01,
+                                      extra="").replace(
+        "upper = [0.03, 0.03, 0.03] }\nrate", "upper = [0.003, 0.003, 0.03] }\nrate"))
+    _sim, keep = run(scene)
+    ids = keep.cat("id")
+    inserted = (ids[:, 30:] >= 0).sum(axis=1)
+    assert inserted[1] < 30  # the first batch did not fit them all
+    assert inserted[-1] == 30
+    assert np.all(np.diff(inserted) >= 0)
+
+
+RECIRCULATED = """
+[scene]
+name = "a gas that leaves through an outlet and comes back"
+duration = {duration}
+effects = []
+seed = 3
+[output]
+frame_interval = 0.01
+[[walls]]
+kind = "box"
+lower = [0.0, 0.0, 0.0]
+upper = [0.02, 0.02, 0.04]
+material = "steel"
+[[fill]]
+count = 40
+material = "glass"
+radius = 0.0007
+region = {{ lower = [0.0, 0.0, 0.01], upper = [0.02, 0.02, 0.03] }}
+speed = 0.5
+[[outlets]]
+kind = "box"
+lower = [0.0, 0.0, 0.0]
+upper = [0.02, 0.02, 0.004]
+[[inflow]]
+recirculate = true
+region = {{ lower = [0.0, 0.0, 0.034], upper = [0.02, 0.02, 0.04] }}
+rate = 2000.0
+interval = 0.01
+velocity = [0.0, 0.0, -0.3]
+"""
+
+
+def test_recirculation_brings_the_spheres_that_left_back_and_the_table_stays_the_same():
+    scene = parse_scene(RECIRCULATED.format(duration=0.4))
+    assert scene.n == 40
+    sim, keep = run(scene)
+    ids = keep.cat("id")
+    kind, i = keep.log("kind"), keep.log("i")
+    left = i[kind == EV_EXIT]
+    assert left.size > 40  # more exits than spheres: they came back and left again
+    back = [s for s in set(left.tolist()) if ids[-1, s] >= 0 or (left == s).sum() > 1]
+    assert back
+    # a sphere is out of the system from its exit until the next batch at most
+    gone = (ids < 0).sum(axis=1)
+    assert gone.max() < 40
+    e_in, e_out = sim.entered_energy, sim.exited_energy
+    assert e_in > 0.0
+    assert e_out > 0.0
+    assert np.all(np.abs(keep.cat("dissipated")) <= 1e-9 * (sim.energy0 + e_in))
+
+
+def test_an_inflow_continues_bit_for_bit_from_a_checkpoint():
+    scene = poured(duration=0.12)
+    whole, keep = Simulation(scene), Keep()
+    keep.checkpoints = []
+    keep.on_checkpoint = keep.checkpoints.append
+    whole.run(observers=[keep], checkpoint_every=0.031)
+    ck = keep.checkpoints[1]
+    again, k2 = Simulation(scene), Keep()
+    again.restore(ck)
+    again.run(observers=[k2])
+    np.testing.assert_array_equal(whole.state, again.state)
+    np.testing.assert_array_equal(whole.inflow_state, again.inflow_state)
+    np.testing.assert_array_equal(keep.cat("id")[ck.frames:], k2.cat("id"))
+
+
+@pytest.mark.parametrize(("extra", "key", "needle"), [
+    ("recirculate = true", "inflow[0].count", "remove 'count'"),
+    ("recirculate = 1", "inflow[0].recirculate", "true or false"),
+    ('[[outlets]]\nkind = "below"\npoint = [0, 0, 0.025]\nnormal = [0, 0, -1]',
+     "inflow[0].region", "reaches into outlet outlets[0]"),
+])
+def test_bad_inflows_are_refused_naming_the_key(extra, key, needle):
+    with pytest.raises(InputError) as err:
+        poured(extra=extra)
+    assert err.value.key == key
+    assert needle in str(err.value)
+
+
+def test_an_inflow_needs_a_rate():
+    with pytest.raises(InputError) as err:
+        parse_scene(POURED.format(duration=0.1, count=5, rate=1.0, interval=0.01, extra="")
+                    .replace("rate = 1.0\n", ""))
+    assert err.value.key == "inflow[0].rate"

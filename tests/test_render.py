@@ -250,12 +250,13 @@ def test_a_sphere_that_has_left_the_system_is_not_drawn(tmp_path, style):
             path, radius=np.full(2, RADIUS), mass=np.full(2, 0.03), material=np.zeros(2, int),
             material_names=["steel"], box_lower=None, box_upper=None,
             periodic=(False, False, False), angular_velocity=False, scene_text=ONE_SPHERE,
-            effects=[], seed=0, version="test", log_events=False, outlets=True) as writer:
+            effects=[], seed=0, version="test", log_events=False, open_system=True) as writer:
         writer.append_frames(dict(step=np.arange(3), time=t, position=position,
                                   velocity=velocity, angular_velocity=None,
                                   kinetic_translational=zeros, kinetic_rotational=None,
                                   potential=zeros, dissipated=zeros,
-                                  id=np.array([[0, 1], [0, 1], [0, -1]]), exited=zeros))
+                                  id=np.array([[0, 1], [0, 1], [0, -1]]), exited=zeros,
+                                  entered=zeros))
     gone = pixel((0.08, 0.0, 0.0), EYE, FOCAL, SIZE)[0]
     masks = []
     for at in ("0.1", "0.2"):

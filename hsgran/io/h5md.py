@@ -120,7 +120,7 @@ class FrameField:
         shape: Shape of one frame's row, :data:`PER_PARTICLE` standing for N and
             :data:`PER_WALL` for the number of planes.
         switch: Argument of :class:`TrajectoryWriter` that turns the field on
-            (``angular_velocity``, ``motion_state``, ``observables``, ``outlets``), or
+            (``angular_velocity``, ``motion_state``, ``observables``, ``open_system``), or
             ``None`` when every file has it.
         fill: The HDF5 fill value of its ``value`` dataset, or ``None`` (``id``: −1 marks a
             particle that is not in the system, as H5MD 1.1 provides).
@@ -167,11 +167,15 @@ FRAME_FIELDS = {
     "unresolved_impulse": FrameField(f"{OBSERVABLES}/unresolved_support_impulse", UNIT_IMPULSE,
                                      np.float64, (3,), "observables"),
     "collisions": FrameField(f"{OBSERVABLES}/collisions", None, np.int64, (2,), "observables"),
-    # with outlets (docs/open-systems.md): each particle's identifier, −1 (the dataset's fill
-    # value) while it is not in the system, and the energy the particles that left carried out
-    "id": FrameField(f"{PARTICLES}/id", None, np.int64, (PER_PARTICLE,), "outlets", fill=-1),
+    # in an open system (outlets or inflows, docs/open-systems.md): each particle's identifier,
+    # −1 (the dataset's fill value) while it is not in the system, and the energy the particles
+    # that left carried out and the inserted ones brought in
+    "id": FrameField(f"{PARTICLES}/id", None, np.int64, (PER_PARTICLE,), "open_system",
+                     fill=-1),
     "exited": FrameField(f"{OBSERVABLES}/exited_energy", UNIT_ENERGY, np.float64, (),
-                         "outlets"),
+                         "open_system"),
+    "entered": FrameField(f"{OBSERVABLES}/entered_energy", UNIT_ENERGY, np.float64, (),
+                          "open_system"),
 }
 #: The element whose ``step`` and ``time`` datasets every other element links to.
 CLOCK = "position"
@@ -293,8 +297,8 @@ class Trajectory:
         periodic: Periodicity of the x, y, z axes.
         energies: Observable name → values [J], shape (F,): ``kinetic_energy_translational``,
             ``potential_energy``, ``dissipated_energy``, with rotation
-            ``kinetic_energy_rotational`` and with outlets ``exited_energy`` (carried out by the
-            particles that left).
+            ``kinetic_energy_rotational`` and in an open system ``exited_energy`` (carried out
+            by the particles that left) and ``entered_energy`` (brought in by inflows).
         events: Event-log field → array, shape (E,), or ``None`` when events were not logged.
         scene_text: The scene file, verbatim.
         effects: Effects of the run.
@@ -317,9 +321,10 @@ class Trajectory:
             (F, W, 3), ``unresolved_support_impulse`` [N s] (F, 3), ``collisions`` (F, 2):
             pair, plane); empty otherwise. :mod:`hsgran.observables` turns them into stress,
             pressure and wall forces.
-        id: With outlets (docs/open-systems.md), each particle's identifier (its index) in
-            every frame, shape (F, N), int64, −1 while it is not in the system (its position,
-            velocity and spin are then NaN); ``None`` otherwise (see :attr:`present`).
+        id: In an open system (outlets or inflows, docs/open-systems.md), each particle's
+            identifier (its index) in every frame, shape (F, N), int64, −1 while it is not in
+            the system (its position, velocity and spin are then NaN); ``None`` otherwise (see
+            :attr:`present`).
     """
 
     time: np.ndarray
@@ -354,7 +359,7 @@ class Trajectory:
     @property
     def present(self) -> np.ndarray:
         """Whether each particle is in the system in each frame, shape (F, N) bool (all, unless
-        the scene has outlets)."""
+        the scene has outlets or inflows)."""
         if self.id is None:
             return np.ones(self.position.shape[:2], dtype=bool)
         return self.id >= 0
@@ -395,8 +400,9 @@ class TrajectoryWriter:
         creator_args: Command line or arguments of the run, for the record.
         motion_state: Whether frames carry every particle's motion state.
         observables: Whether frames carry the interval sums (docs/observables.md).
-        outlets: Whether particles may leave the system: frames carry each particle's ``id``
-            (−1 while it is absent) and the energy carried out (docs/open-systems.md).
+        open_system: Whether particles may leave or enter the system: frames carry each
+            particle's ``id`` (−1 while it is absent) and the energy carried out and brought in
+            (docs/open-systems.md).
         checkpoint_layout: Shape and dtype of every checkpoint array by name (two slots are
             preallocated, see :meth:`write_checkpoint`), or ``None`` for no checkpoints.
         overrides: Key path → value changes the scene was run with (JSON-serialisable).
@@ -432,7 +438,7 @@ class TrajectoryWriter:
         creator_args: str = "",
         motion_state: bool = False,
         observables: bool = False,
-        outlets: bool = False,
+        open_system: bool = False,
         checkpoint_layout: dict | None = None,
         overrides: dict | None = None,
         walls: Walls | None = None,
@@ -490,11 +496,11 @@ class TrajectoryWriter:
         self.has_motion_state = bool(motion_state)
         #: The switches of :attr:`FrameField.switch`.
         self.has_observables = bool(observables)
-        self.has_outlets = bool(outlets)
+        self.has_open_system = bool(open_system)
         self._switches = {"angular_velocity": self.has_angular_velocity,
                           "motion_state": self.has_motion_state,
                           "observables": self.has_observables,
-                          "outlets": self.has_outlets}
+                          "open_system": self.has_open_system}
         self.has_events = bool(log_events)
         self.has_edges = any(periodic)
         self._edges = None if box_lower is None else box_upper - box_lower

@@ -125,7 +125,7 @@ def test_round_trip_is_bit_for_bit(tmp_path, angular):
     else:
         assert traj.angular_velocity is None
         assert traj.motion_state is None
-    names = set(ENERGY_OBSERVABLES) - {"exited_energy"} - (
+    names = set(ENERGY_OBSERVABLES) - {"exited_energy", "entered_energy"} - (
         set() if angular else {"kinetic_energy_rotational"})
     assert set(traj.energies) == names
     for name in names:
@@ -166,15 +166,16 @@ def test_an_event_log_of_format_1_reads_with_nan_velocities(tmp_path):
 
 
 def test_the_id_of_an_open_system_marks_absent_particles(tmp_path):
-    """With ``outlets=True`` the frames carry H5MD's ``id`` (fill value −1 for a particle not in
+    """With ``open_system=True`` the frames carry H5MD's ``id`` (fill value −1 for a particle not in
     the system) and the energy carried out."""
     path = tmp_path / "open.h5"
     blocks = make_blocks()
-    with TrajectoryWriter(path, **writer_args(), outlets=True) as writer:
+    with TrajectoryWriter(path, **writer_args(), open_system=True) as writer:
         for b in blocks:
             ids = np.broadcast_to(np.arange(N), (b["step"].size, N)).copy()
             ids[b["step"] % 3 == 0, 2] = -1
-            writer.append_frames(dict(b, id=ids, exited=np.ones(b["step"].size)))
+            writer.append_frames(dict(b, id=ids, exited=np.ones(b["step"].size),
+                                      entered=np.zeros(b["step"].size)))
     traj = read_trajectory(path)
     assert np.array_equal(traj.present[:, 2], concat(blocks, "step") % 3 != 0)
     assert traj.present[:, [0, 1, 3]].all()
@@ -246,7 +247,7 @@ def test_file_has_the_h5md_1_1_structure(tmp_path):
             "particles/all/box/edges": "m",
         }
         elements.update({f"observables/{name}": "J" for name, field in ENERGY_OBSERVABLES.items()
-                         if FRAME_FIELDS[field].switch != "outlets"})
+                         if FRAME_FIELDS[field].switch != "open_system"})
         assert f["particles/all/velocity/value"] != position["value"]  # the == below means it
         for name, unit in elements.items():
             element = f[name]
@@ -496,7 +497,7 @@ def test_the_writer_takes_the_engines_blocks(tmp_path):
     for name in ("position", "velocity", "angular_velocity", "motion_state"):
         np.testing.assert_array_equal(getattr(traj, name), concat(blocks, name), strict=True)
     for observable, name in ENERGY_OBSERVABLES.items():
-        if FRAME_FIELDS[name].switch != "outlets":  # (a closed system's blocks)
+        if FRAME_FIELDS[name].switch != "open_system":  # (a closed system's blocks)
             np.testing.assert_array_equal(traj.energies[observable], concat(blocks, name))
     for name, (dtype, _unit) in EVENT_FIELDS.items():
         np.testing.assert_array_equal(traj.events[name], events[name].astype(dtype))
