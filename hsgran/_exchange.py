@@ -51,21 +51,17 @@ def remove_sphere(i, t, flight, dyn, walls, space, grid, sched, clus, isc, fsc, 
     """Sphere i leaves the system at time t [s] through an outlet.
 
     The caller has advanced its state to t (and logged it, with its velocity). Then: the
-    energy it carries out is added to ``fsc[F_EXITED]``; with gravity the spheres asleep on it
-    fall (hsgran._settling.wake_sleepers) and, with clusters, the spheres resting on it or
-    moving in contact with it are solved again without it (hsgran._cluster.resolve_without);
-    it leaves the cell lists and the calendar, its counter moves on (every pair event
-    predicted with it is stale), and it stays where it left, at rest, marked absent.
+    energy it carries out is added to ``fsc[F_EXITED]``; it leaves the cell lists and stops
+    where it is; with gravity the spheres asleep on it fall (hsgran._settling.wake_sleepers)
+    and, with clusters, the spheres resting on it or moving in contact with it are solved again
+    without it (hsgran._cluster.resolve_without); its counter moves on (every pair event
+    predicted with it is stale), and it leaves the calendar, marked absent.
     """
     rotation = flags[FL_ROTATION]
     st, acc, mstate = flight.st, flight.acc, flight.mstate
     omg, alpha = dyn.omg, dyn.alpha
     fsc[F_EXITED] += exit_energy(i, st, omg, dyn.inv_m, dyn.inv_i, space.gravity, rotation)
-    flight.counter[i] += 1
-    if grav_on:
-        wake_sleepers(i, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation)
-        if flags[FL_CLUSTERS]:
-            resolve_without(i, t, flight, walls, space, grid, sched, clus, isc)
+    # out of the grid and at rest first: the spheres set free below are predicted without it
     cell = grid.cell
     remove(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], grid.ncell), grid.head, grid.nxt,
            grid.prv)
@@ -75,10 +71,16 @@ def remove_sphere(i, t, flight, dyn, walls, space, grid, sched, clus, isc, fsc, 
             acc[i, k] = 0.0
             if rotation:
                 alpha[i, k] = 0.0
+        # (the walks below find its neighbours from its cell, and the touching ones from its
+        # position, which stays)
+        wake_sleepers(i, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation)
+        if flags[FL_CLUSTERS]:
+            resolve_without(i, t, flight, walls, space, grid, sched, clus, isc)
         mstate[i] = MS_FLIGHT
         flight.mplane[i] = -1
         flight.seg_end[i] = NEVER
         flight.seg_code[i] = END_NONE
+    flight.counter[i] += 1
     flight.present[i] = 0
     sched.ev_t[i] = NEVER
     sched.ev_kind[i] = EV_NONE
@@ -104,6 +106,8 @@ def enter_sphere(i, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rot
     flight.present[i] = 1
     flight.counter[i] += 1
     dyn.zstreak[i] = 0
+    dyn.t_last[i] = -NEVER  # no collision history (a recirculated sphere's is of its last stay)
+    dyn.rapid[i] = 0
     if grav_on:
         for k in range(3):
             flight.acc[i, k] = space.gravity[k]
@@ -116,9 +120,13 @@ def enter_sphere(i, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rot
     reschedule_fn(i, t, flight, walls, space, grid, sched, isc, grav_on)
     # the neighbours, gathered first: a prediction overwrites grid.heads
     m = 0
-    for h in range(cell_heads(i, grid, space)):
+    heads = cell_heads(i, grid, space)
+    for h in range(heads):
         q = grid.heads[h]
-        while q >= 0:
+        seen = False  # a grid of one or two cells on a periodic axis repeats its lists
+        for e in range(h):
+            seen = seen or grid.heads[e] == q
+        while q >= 0 and not seen:
             around[m] = q
             m += 1
             q = grid.nxt[q]

@@ -253,8 +253,7 @@ def _absent_row(f, j, out, grav_on, rotation):
         out.fr_vel[f, j, k] = math.nan
         if rotation:
             out.fr_omg[f, j, k] = math.nan
-    if grav_on:
-        out.fr_ms[f, j] = MS_ABSENT
+    out.fr_ms[f, j] = MS_ABSENT
 
 
 @njit(inline="always")

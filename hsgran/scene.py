@@ -190,6 +190,9 @@ WALL_KINDS = ("plane", "box", "cylinder")
 PARTICLE_KEYS = ("material", "radius", "position", "velocity", "angular_velocity")
 FILL_KEYS = ("count", "material", "radius", "region", "speed", "angular_velocity")
 REGION_KEYS = ("lower", "upper")
+#: Most spheres an inflow's rate may ask for over a run: its counts round(rate·interval·(k+1))
+#: stay exact integers far below this (2⁵³), and no table could hold more.
+MAX_INFLOW_SPHERES = 1e12
 #: Keys of an ``[[inflow]]`` entry (docs/open-systems.md); a recirculating one has no count,
 #: material or radius (it inserts the spheres that left).
 INFLOW_KEYS = ("count", "material", "radius", "region", "rate", "interval", "start", "velocity",
@@ -709,10 +712,11 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     library = MaterialLibrary()
     library.add_tables(doc, origin=source)
     walls = _parse_walls(doc, library, head.periodic)
-    outlets = _parse_outlets(doc, head.periodic)
+    outlets = _parse_outlets(doc, head.periodic, None if walls.box_key is None
+                             else (walls.box_lower, walls.box_upper))
     particles = _parse_particles(doc, library, head.effects)
     fills = _parse_fills(doc, library, head.effects, walls)
-    inflows = _parse_inflows(doc, library, walls, frame_interval)
+    inflows = _parse_inflows(doc, library, walls, frame_interval, head.duration)
     _check_total(len(particles), [(f.key, f.count) for f in fills]
                  + [(f["key"], f["count"]) for f in inflows])
     _check_periodic_planes(walls, head.periodic)
@@ -731,14 +735,17 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     space = _space(planes, cylinders, walls, head.periodic)
 
     # everything that does not need the fills' positions, before the (costly) placement
-    _check_grid(walls, head.periodic, np.concatenate([explicit.radius,
-                                                      [f.radius[1] for f in fills]]))
+    _check_grid(walls, head.periodic, np.concatenate([
+        explicit.radius, [f.radius[1] for f in fills],
+        [f["radius"][1] for f in inflows if not f["recirculate"]]]))
     _check_explicit(walls, head.periodic, explicit.position, names)
     _check_overlaps(explicit.position, explicit.radius, space, names)
     _check_planes(planes + list(cylinders), explicit.position, explicit.radius, names)
-    _check_friction(head.effects, library, material_names,
-                    _sphere_counts(explicit, fills, material_names),
-                    planes + list(cylinders))
+    counts = _sphere_counts(explicit, fills, material_names)
+    for f in inflows:  # an inflow's spheres meet the same walls and spheres
+        if not f["recirculate"]:
+            counts[material_names.index(f["material"])] += f["count"]
+    _check_friction(head.effects, library, material_names, counts, planes + list(cylinders))
     _check_plasticity(doc, head.effects, sphere_materials)
 
     spheres = _place_fills(head.seed, fills, explicit, space, material_names)
@@ -749,8 +756,13 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     _check_outlets(outlets, spheres.position, names)
     n_present = spheres.radius.shape[0]
     inflow_rows, reserve = _reserve_rows(head.seed, inflows, n_present, material_names)
-    _check_inflows(inflow_rows, outlets, spheres.radius)
     spheres = spheres.then(reserve)
+    _check_inflows(inflow_rows, outlets, spheres.radius)
+    if observables and (outlets or inflows):
+        raise InputError("the observables (stress, wall impulses) are not kept for open systems "
+                         "yet: a sphere that leaves or enters would unbalance the momentum "
+                         "ledgers; remove 'observables' or the outlets and inflows",
+                         "output.observables")
 
     return Scene(
         name=head.name,
@@ -922,8 +934,9 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
     return _Walls(entries, box_lower, box_upper, box_key)
 
 
-def _parse_outlets(doc: dict, periodic: tuple) -> tuple:
-    """The ``[[outlets]]`` entries → :class:`Outlet` values (docs/open-systems.md)."""
+def _parse_outlets(doc: dict, periodic: tuple, box=None) -> tuple:
+    """The ``[[outlets]]`` entries → :class:`Outlet` values (docs/open-systems.md); ``box``:
+    the box's (lower, upper) corners, or ``None``."""
     outlets = []
     for k, t in enumerate(_array_of_tables(doc, "outlets")):
         key = f"outlets[{k}]"
@@ -948,6 +961,11 @@ def _parse_outlets(doc: dict, periodic: tuple) -> tuple:
         else:
             row[OL_KIND] = OUT_BOX
             row[OL_A:OL_A + 3], row[OL_B:OL_B + 3] = _corners(t, key)
+            for i in range(3):
+                if periodic[i] and box is not None and not (
+                        box[0][i] <= row[OL_A + i] and row[OL_B + i] <= box[1][i]):
+                    raise InputError(f"must lie inside the periodic box along {AXES[i]} (the "
+                                     "spheres' coordinates wrap there)", f"{key}.upper")
         outlets.append(Outlet(row, key))
     return tuple(outlets)
 
@@ -1287,7 +1305,7 @@ def _place_fills(seed: int, fills: list[Fill], explicit: _Spheres, space: Space,
 
 
 def _parse_inflows(doc: dict, library: MaterialLibrary, walls: _Walls,
-                   frame_interval: float) -> list[dict]:
+                   frame_interval: float, duration: float) -> list[dict]:
     """The ``[[inflow]]`` entries → their checked values (docs/open-systems.md)."""
     inflows = []
     for k, t in enumerate(_array_of_tables(doc, "inflow")):
@@ -1314,8 +1332,15 @@ def _parse_inflows(doc: dict, library: MaterialLibrary, walls: _Walls,
         entry["lower"], entry["upper"] = _region(t, key, entry["radius"][1], walls)
         entry["rate"] = check_positive(_require(t, "rate", key, "spheres per second"),
                                        f"{key}.rate", "1/s")
+        if entry["rate"] * duration > MAX_INFLOW_SPHERES:
+            raise InputError(f"asks for {entry['rate'] * duration:.3g} spheres over the run, "
+                             f"more than {MAX_INFLOW_SPHERES:.0e}", f"{key}.rate")
         entry["interval"] = check_positive(t.get("interval", frame_interval),
                                            f"{key}.interval", "s")
+        if duration / entry["interval"] > MAX_FRAMES:
+            raise InputError(f"{_fmt(entry['interval'])} s gives more than {MAX_FRAMES:.0e} "
+                             f"batches over {_fmt(duration)} s (each stops the event loop): "
+                             "make it longer", f"{key}.interval")
         entry["start"] = check_number(t.get("start", 0.0), f"{key}.start")
         if entry["start"] < 0.0:
             raise InputError(f"must be >= 0 s, got {t['start']!r}", f"{key}.start")

@@ -287,6 +287,7 @@ def test_an_elastic_gas_drains_and_the_spheres_that_left_never_meet_anything():
             assert s not in exit_time or t[row] <= exit_time[s]
     # the count in the system never grows; the frames agree with the log
     present = keep.cat("id") >= 0
+    assert np.all(keep.cat("motion_state")[~present] == MS_ABSENT)
     counts = present.sum(axis=1)
     assert np.all(np.diff(counts) <= 0)
     for f, tf in enumerate(keep.cat("time")):
@@ -552,6 +553,20 @@ def test_bad_inflows_are_refused_naming_the_key(extra, key, needle):
         poured(extra=extra)
     assert err.value.key == key
     assert needle in str(err.value)
+
+
+def test_observables_and_periodic_boxes_of_open_systems_are_refused():
+    with pytest.raises(InputError) as err:
+        parse_scene(GAS.format(duration=0.1).replace("frame_interval = 0.005",
+                                                      "frame_interval = 0.005\nobservables = true"))
+    assert err.value.key == "output.observables"
+    periodic = GAS.format(duration=0.1).replace("seed = 5", "seed = 5\nperiodic = [true, false, "
+                                                "false]").replace(
+        "lower = [0.0, 0.0, 0.0]\nupper = [0.006, 0.006, 0.004]",
+        "lower = [-0.001, 0.0, 0.0]\nupper = [0.006, 0.006, 0.004]")
+    with pytest.raises(InputError) as err:
+        parse_scene(periodic)
+    assert err.value.key == "outlets[0].upper"
 
 
 def test_an_inflow_needs_a_rate():
