@@ -33,9 +33,10 @@ def absent(flight, i):
 
 
 @njit
-def exit_energy(i, st, omg, inv_m, inv_i, gravity, rotation):
+def sphere_energy(i, st, omg, inv_m, inv_i, gravity, rotation):
     """Mechanical energy sphere i carries [J]: ½ m v² + ½ I ω² − m g·x (the potential of
-    hsgran.engine's energies, zero at the origin), from its stored state."""
+    hsgran.engine's energies, zero at the origin), from its stored state: what it takes out
+    of the system when it leaves, or brings in when it enters."""
     m = 1.0 / inv_m[i]
     e = 0.0
     for k in range(3):
@@ -60,7 +61,7 @@ def remove_sphere(i, t, flight, dyn, walls, space, grid, sched, clus, isc, fsc, 
     rotation = flags[FL_ROTATION]
     st, acc, mstate = flight.st, flight.acc, flight.mstate
     omg, alpha = dyn.omg, dyn.alpha
-    fsc[F_EXITED] += exit_energy(i, st, omg, dyn.inv_m, dyn.inv_i, space.gravity, rotation)
+    fsc[F_EXITED] += sphere_energy(i, st, omg, dyn.inv_m, dyn.inv_i, space.gravity, rotation)
     # out of the grid and at rest first: the spheres set free below are predicted without it
     cell = grid.cell
     remove(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], grid.ncell), grid.head, grid.nxt,

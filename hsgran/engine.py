@@ -40,7 +40,7 @@ import numpy as np
 from hsgran import _loop as ev
 from hsgran import _state as es
 from hsgran._cluster import slack
-from hsgran._exchange import enter_sphere
+from hsgran._exchange import enter_sphere, sphere_energy
 from hsgran._flight import MAX_ZERO_TIME_EVENTS
 from hsgran._state import FIELDS, Sizes, allocate, groups_of, stored_fields
 from hsgran.contact import compliance, viscous
@@ -668,8 +668,9 @@ class Simulation:
                 enter_sphere(int(i), t, flight, dyn, walls, space, grid, sched, self.isc,
                              grav_on, self.rotation, self._around)
                 self.entered[i] = 1
-                self.fsc[es.F_ENTERED] += (0.5 * self.mass[i] * float(v @ v)
-                                           - self.mass[i] * float(x @ self.gravity))
+                self.fsc[es.F_ENTERED] += sphere_energy(int(i), self.state, self.omg,
+                                                        self.inv_m, self.inv_i, self.gravity,
+                                                        self.rotation)
                 done += 1
             state[0], state[1] = k + 1, done
 

@@ -557,6 +557,15 @@ def _length(vector: np.ndarray) -> float:
     return math.hypot(*(float(v) for v in vector))
 
 
+def _kind(table: dict, key: str, known: tuple, what: str, expected: str) -> str:
+    """The ``kind`` of a table, one of ``known`` (``what`` names it in the message)."""
+    kind = _string(_require(table, "kind", key, expected), f"{key}.kind")
+    if kind not in known:
+        raise InputError(f"unknown {what} '{kind}'{did_you_mean(kind, known)}; "
+                         f"known: {', '.join(known)}", f"{key}.kind")
+    return kind
+
+
 def _direction(table: dict, name: str, key: str, meaning: str) -> np.ndarray:
     """The unit vector of ``table[name]`` (a non-zero [x, y, z]; ``meaning`` says what it
     points to, for the messages)."""
@@ -893,10 +902,7 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
     box_key: str | None = None
     for k, w in enumerate(_array_of_tables(doc, "walls")):
         key = f"walls[{k}]"
-        kind = _string(_require(w, "kind", key, "'plane' or 'box'"), f"{key}.kind")
-        if kind not in WALL_KINDS:
-            raise InputError(f"unknown wall kind '{kind}'{did_you_mean(kind, WALL_KINDS)}; "
-                             f"known: {', '.join(WALL_KINDS)}", f"{key}.kind")
+        kind = _kind(w, key, WALL_KINDS, "wall kind", "'plane' or 'box'")
         if kind == "cylinder":
             entries.append(_parse_cylinder(w, key, library, periodic))
             continue
@@ -940,10 +946,7 @@ def _parse_outlets(doc: dict, periodic: tuple, box=None) -> tuple:
     outlets = []
     for k, t in enumerate(_array_of_tables(doc, "outlets")):
         key = f"outlets[{k}]"
-        kind = _string(_require(t, "kind", key, "'below' or 'box'"), f"{key}.kind")
-        if kind not in OUTLET_KEYS:
-            raise InputError(f"unknown outlet kind '{kind}'{did_you_mean(kind, OUTLET_KEYS)}; "
-                             f"known: {', '.join(OUTLET_KEYS)}", f"{key}.kind")
+        kind = _kind(t, key, tuple(OUTLET_KEYS), "outlet kind", "'below' or 'box'")
         _check_keys(t, OUTLET_KEYS[kind], key)
         row = np.zeros(OL_SIZE)
         if kind == "below":
@@ -1030,10 +1033,7 @@ def _parse_motion(tab, key: str, normal: np.ndarray) -> np.ndarray:
     """A plane's ``motion`` table → its row of hsgran.wallmotion ``M_*`` values."""
     tab = _table(tab, key, "a table: { kind = \"oscillation\", ... } or "
                            "{ kind = \"velocity\", ... }")
-    kind = _string(_require(tab, "kind", key, "'oscillation' or 'velocity'"), f"{key}.kind")
-    if kind not in MOTION_KEYS:
-        raise InputError(f"unknown motion '{kind}'{did_you_mean(kind, tuple(MOTION_KEYS))}; "
-                         f"known: {', '.join(MOTION_KEYS)}", f"{key}.kind")
+    kind = _kind(tab, key, tuple(MOTION_KEYS), "motion", "'oscillation' or 'velocity'")
     _check_keys(tab, MOTION_KEYS[kind], key)
     row = np.zeros(M_SIZE)
     if kind == "oscillation":
