@@ -31,11 +31,24 @@ from hsgran._riding import (
     takeoff_delay,
 )
 from hsgran._state import F_CHI, F_TC_TIME, S_R, S_T, S_V
+from hsgran.facets import END_OFF, face_coordinates, face_leave_time, on_face
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, approach_noise, flight_position, plane_gap
 from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
 from hsgran.wallmotion import wall_speed
-from hsgran.wallspec import CY_OMEGA, M_DIR, WK_CYLINDER, WK_MOVING, WK_PLANE
+from hsgran.wallspec import (
+    BL_RADIUS,
+    CY_AXIS,
+    CY_FINITE,
+    CY_HALF,
+    CY_OMEGA,
+    M_DIR,
+    WK_BALL,
+    WK_CYLINDER,
+    WK_FACE,
+    WK_MOVING,
+    WK_PLANE,
+)
 
 #: A sphere whose gap to a plane is within this fraction of its radius counts as touching it
 #: [-]: a gap of 1e-10 R is far above the rounding of a position dotted with a normal (~1e-16 of
@@ -218,6 +231,12 @@ def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, fri
         alpha[i, 0] = alx
         alpha[i, 1] = aly
         alpha[i, 2] = alz
+    if face(walls, w):
+        off = face_leave_time(st[i, 0], st[i, 1], st[i, 2], st[i, 3], st[i, 4], st[i, 5], ax, ay,
+                              az, planes_p, walls.planes_geo, walls.face_lines, w)
+        if off < dur:
+            dur = off
+            code = END_OFF
     seg_end[i] = t + dur
     seg_code[i] = code
 
@@ -249,15 +268,78 @@ def moving(walls, w):
 @njit(inline="always")
 def holds_now(walls, w, t, gravity):
     """Whether wall w can hold a sphere that lands on it at time t [s]: any wall but a moving
-    plane that pulls away from its spheres then (hsgran._riding)."""
+    plane that pulls away from its spheres then (hsgran._riding) and a fixed sphere or corner
+    (a sphere has no motion state on it: it bounces, or a cluster holds it)."""
+    if ball(walls, w):
+        return False
     return not moving(walls, w) or takeoff_delay(gravity, walls, w, t) > 0.0
 
 
 @njit(inline="always")
 def immovable(walls, w):
-    """Whether wall w neither moves nor turns: a fixed plane, or a cylinder at rest (a sphere
-    wedged against it may be stopped, hsgran._settling)."""
-    return walls.planes_kind[w] == WK_PLANE or (curved(walls, w) and not turning(walls, w))
+    """Whether wall w neither moves nor turns: a fixed plane, a part of a finite wall, a fixed
+    sphere, or a cylinder at rest (a sphere wedged against it may be stopped,
+    hsgran._settling)."""
+    kind = walls.planes_kind[w]
+    return kind == WK_PLANE or kind == WK_FACE or kind == WK_BALL or (
+        curved(walls, w) and not turning(walls, w))
+
+
+@njit(inline="always")
+def ball(walls, w):
+    """Whether wall w is a fixed sphere or a corner of a finite wall."""
+    return walls.planes_kind[w] == WK_BALL
+
+
+@njit(inline="always")
+def face(walls, w):
+    """Whether wall w is a face of a finite wall."""
+    return walls.planes_kind[w] == WK_FACE
+
+
+@njit(inline="always")
+def ball_normal(walls, w, x, y, z):
+    """Unit normal of fixed sphere (or corner) w at its contact with a sphere centred at
+    (x, y, z) [m], pointing to the sphere (any direction from its very centre)."""
+    dx = x - walls.planes_p[w, 0]
+    dy = y - walls.planes_p[w, 1]
+    dz = z - walls.planes_p[w, 2]
+    d = (dx * dx + dy * dy + dz * dz) ** 0.5
+    if d == 0.0:
+        return 0.0, 0.0, 1.0
+    return dx / d, dy / d, dz / d
+
+
+@njit(inline="always")
+def set_ball_contact(walls, w, x, y, z):
+    """Store fixed sphere w's normal at its contact with the sphere at (x, y, z) [m] in
+    ``planes_n[w]`` (what the collision model reads of a wall; it neither moves nor turns)."""
+    nx, ny, nz = ball_normal(walls, w, x, y, z)
+    walls.planes_n[w, 0] = nx
+    walls.planes_n[w, 1] = ny
+    walls.planes_n[w, 2] = nz
+
+
+@njit(inline="always")
+def wall_curvature(walls, w, r):
+    """1/R* of a sphere of radius r [m] against wall w [1/m]: 1/r + 1/R against a fixed sphere
+    of radius R, 1/r against a flat wall, an edge or a corner (MODEL §2; an edge or a corner
+    is taken as flat in the collision model, docs/walls.md, "Finite walls")."""
+    if ball(walls, w) and walls.planes_geo[w, BL_RADIUS] > 0.0:
+        return 1.0 / r + 1.0 / walls.planes_geo[w, BL_RADIUS]
+    return 1.0 / r
+
+
+@njit(inline="always")
+def beyond_ends(walls, w, x, y, z):
+    """Whether the point (x, y, z) [m] lies beyond the ends of edge w (a finite cylinder),
+    measured along its axis; never for a cylinder wall."""
+    if walls.planes_cyl[w, CY_FINITE] == 0.0:
+        return False
+    s = ((x - walls.planes_p[w, 0]) * walls.planes_cyl[w, CY_AXIS]
+         + (y - walls.planes_p[w, 1]) * walls.planes_cyl[w, CY_AXIS + 1]
+         + (z - walls.planes_p[w, 2]) * walls.planes_cyl[w, CY_AXIS + 2])
+    return abs(s) > walls.planes_cyl[w, CY_HALF]
 
 
 @njit(inline="always")
@@ -275,20 +357,38 @@ def curved(walls, w):
 @njit(inline="always")
 def wall_normal(walls, w, x, y, z):
     """Unit normal of wall w at its contact with a sphere centred at (x, y, z) [m], pointing
-    to the sphere: a plane's normal, or a cylinder's there."""
+    to the sphere: a plane's (or a face's) normal, or a cylinder's or a fixed sphere's
+    there."""
     if curved(walls, w):
         return cylinder_normal(x, y, z, walls, w)
+    if ball(walls, w):
+        return ball_normal(walls, w, x, y, z)
     return walls.planes_n[w, 0], walls.planes_n[w, 1], walls.planes_n[w, 2]
 
 
 @njit(inline="always")
 def wall_gap(i, w, st, walls):
-    """Gap [m] of sphere i to wall w, a fixed plane or a cylinder (whose row then describes
-    its contact with sphere i, for :func:`pressed`)."""
+    """Gap [m] of sphere i to wall w, a fixed plane, a cylinder or a fixed sphere (whose row
+    then describes its contact with sphere i, for :func:`pressed`), or a face or an edge of
+    a finite wall (``inf`` where the sphere is off it: its foot off the face, behind it, or
+    beyond the edge's ends)."""
+    x, y, z, r = st[i, 0], st[i, 1], st[i, 2], st[i, S_R]
     if curved(walls, w):
-        set_cylinder_contact(walls, w, st[i, 0], st[i, 1], st[i, 2])
-        return cylinder_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], walls, w)
-    return plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], walls.planes_p, walls.planes_n, w)
+        if beyond_ends(walls, w, x, y, z):
+            return NEVER
+        set_cylinder_contact(walls, w, x, y, z)
+        return cylinder_gap(x, y, z, r, walls, w)
+    if ball(walls, w):
+        set_ball_contact(walls, w, x, y, z)
+        p = walls.planes_p
+        return (((x - p[w, 0]) ** 2 + (y - p[w, 1]) ** 2 + (z - p[w, 2]) ** 2) ** 0.5 - r
+                - walls.planes_geo[w, BL_RADIUS])
+    gap = plane_gap(x, y, z, r, walls.planes_p, walls.planes_n, w)
+    if face(walls, w):
+        u, v = face_coordinates(x, y, z, walls.planes_p, walls.planes_geo, w)
+        if gap < -r or not on_face(u, v, walls.planes_geo, walls.face_lines, w):
+            return NEVER
+    return gap
 
 
 @njit(inline="always")

@@ -42,6 +42,7 @@ from hsgran._flight import (
     START_GAP_REL,
     advance,
     approaching,
+    ball,
     curved,
     enter_plane,
     leave_plane,
@@ -49,9 +50,11 @@ from hsgran._flight import (
     moving,
     note_progress,
     pressed,
+    set_ball_contact,
     set_wall_velocity,
     state_at,
     tc_row,
+    wall_curvature,
     wall_gap,
 )
 from hsgran._jit import njit, prefetch
@@ -140,6 +143,7 @@ from hsgran.events.kinds import (
     EV_WEDGE,
 )
 from hsgran.events.kinds import EVENT_NAMES as EVENT_NAMES  # re-exported for hsgran.engine
+from hsgran.facets import END_OFF
 from hsgran.motion import NEVER
 from hsgran.onplane import END_NONE, END_RESOLVE, MS_ABSENT, MS_ASLEEP, MS_FLIGHT, MS_REST
 
@@ -207,6 +211,8 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
             if absent(flight, i):
                 continue
             for w in range(planes_p.shape[0]):
+                if ball(walls, w):
+                    continue  # (no motion state on a fixed sphere)
                 gap = wall_gap(i, w, st, walls)
                 gn, vn = pressed(i, w, 0.0, st, walls, space.gravity)
                 if (abs(gap) <= START_GAP_REL * st[i, S_R] and gn > 0.0
@@ -380,7 +386,7 @@ def _pair_handler(grav_on):
                                      out, fsc, isc, counts, rec, log_on)
         if grav_on:
             # a slow meeting that ends in rest instead of a collision (see _settling.settle)
-            rule, who, what = settle(i, j, nx, ny, nz, t, flight, dyn, walls, space.gravity,
+            rule, who, what = settle(i, j, nx, ny, nz, t, flight, dyn, walls, grid, space.gravity,
                                      pair_table, fsc, friction, rolling, rotation)
             if rule != SETTLE_NONE:
                 # re-predictions in a fixed order (it sets the sequence numbers that break ties
@@ -473,6 +479,8 @@ def _wall_handler(grav_on):
             set_wall_velocity(walls, w, t)
         elif curved(walls, w):
             set_cylinder_contact(walls, w, st[i, 0], st[i, 1], st[i, 2])
+        elif ball(walls, w):
+            set_ball_contact(walls, w, st[i, 0], st[i, 1], st[i, 2])
         obs_on = observing(dyn)
         p_i = before_wall(i, t, flight, dyn, walls, space, grav_on) if obs_on else (0.0, 0.0, 0.0)
         if grav_on and flags[FL_CLUSTERS] and cluster_collision(
@@ -503,7 +511,8 @@ def _wall_handler(grav_on):
                                 fsc, dyn.row_tc)
             hit = resolve(st[i, S_V:S_V + 3], omg[i] if rotation else omg[0], walls.planes_vel[w],
                           walls.planes_omg[w], planes_n[w, 0], planes_n[w, 1], planes_n[w, 2],
-                          dyn.inv_m[i], 0.0, dyn.inv_i[i], 0.0, ri, 0.0, 1.0 / ri, row, rec,
+                          dyn.inv_m[i], 0.0, dyn.inv_i[i], 0.0, ri, 0.0,
+                          wall_curvature(walls, w, ri), row, rec,
                           flags[FL_PLASTICITY], flags[FL_FRICTION], flags[FL_ROLLING],
                           flags[FL_ADHESION], rotation, False, flags[FL_COMPLIANCE],
                           flags[FL_VISCOUS])
@@ -554,11 +563,13 @@ def _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out, pair_tabl
             return STATUS_LOG_FULL
         return GO_ON
     w = np.int64(mplane[i])
-    if ended == END_TAKEOFF:
+    if ended == END_TAKEOFF or ended == END_OFF:
         # the plane pulls away faster than gravity, or a piston starts or stops
-        # (hsgran._riding): on the plane, at its speed, the sphere flies
+        # (hsgran._riding), or the sphere's foot leaves its face (hsgran.facets): the sphere
+        # flies from there (at the plane's speed)
         advance(st, flight.acc, dyn.omg, dyn.alpha, i, t, grav_on, rotation)
-        leave_ride(i, w, t, st, walls)
+        if ended == END_TAKEOFF:
+            leave_ride(i, w, t, st, walls)
         leave_plane(i, flight, dyn, space.gravity, rotation)
     elif curved(walls, w):
         # a segment on a cylinder ends (hsgran._cylinder): on the surface again, with the

@@ -20,7 +20,15 @@ from hsgran._jit import njit, prefetch
 from hsgran._riding import moving_gap
 from hsgran._state import I_PEND_A, I_PEND_B, I_SEQ, S_R
 from hsgran.events.calendar import calendar_update, has_buckets
+from hsgran.events.grid import slot_of
 from hsgran.events.kinds import EV_CELL, EV_EXIT, EV_NONE, EV_PAIR, EV_STATE, EV_WALL
+from hsgran.facets import (
+    ball_contact_time,
+    edge_contact_time,
+    face_coordinates,
+    face_leave_time,
+    on_face,
+)
 from hsgran.motion import (
     NEVER,
     cylinder_contact_time,
@@ -33,7 +41,17 @@ from hsgran.motion import (
 from hsgran.onplane import MS_FLIGHT, MS_SUPPORTED
 from hsgran.outlets import outlet_entry_time
 from hsgran.wallmotion import moving_plane_contact_time
-from hsgran.wallspec import CY_RADIUS, CY_SIDE, WK_PLANE
+from hsgran.wallspec import (
+    BL_RADIUS,
+    CY_AXIS,
+    CY_FINITE,
+    CY_HALF,
+    CY_RADIUS,
+    CY_SIDE,
+    WK_BALL,
+    WK_FACE,
+    WK_PLANE,
+)
 
 #: Cells a crossed axis needs for the crossing to look only at the new layer of neighbouring
 #: cells (see predict): with 1 or 2 the lists of that axis are not neighbour layers.
@@ -153,24 +171,67 @@ def cell_heads(s, grid, space):
     return m
 
 
+@njit(inline="always")
+def near_walls(i, walls, grid):
+    """(how many walls sphere i looks at, where its cell's parts start in ``part_items``):
+    the walls every prediction looks at (``Walls.global_rows``), then the parts of finite
+    walls listed in its cell (events.grid.part_lists); walk them with :func:`near_wall`."""
+    n_global = walls.global_rows.shape[0]
+    if grid.part_items.shape[0] == 0:
+        return n_global, 0
+    s = slot_of(grid.cell[i, 0], grid.cell[i, 1], grid.cell[i, 2], grid.ncell)
+    a = grid.part_start[s]
+    return n_global + grid.part_start[s + 1] - a, a
+
+
+@njit(inline="always")
+def near_wall(k, walls, grid, a):
+    """The k-th wall of :func:`near_walls` (``a``: its second value)."""
+    n_global = walls.global_rows.shape[0]
+    if k < n_global:
+        return walls.global_rows[k]
+    return grid.part_items[a + k - n_global]
+
+
 @njit
-def other_wall_time(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, t_now, horizon):
+def other_wall_time(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, t_now, horizon, supported,
+                    slack, seg_left):
     """Delay [s] until a sphere of radius r [m] at (x, y, z) [m] with velocity (u, v, w_) [m/s]
-    and acceleration (gx, gy, gz) [m/s²] at t_now [s] meets wall w, a moving plane or a
-    cylinder; ``inf`` if not within ``horizon`` [s]."""
+    and acceleration (gx, gy, gz) [m/s²] at t_now [s] meets wall w, a moving plane, a
+    cylinder, an edge or a fixed sphere; ``inf`` if not within ``horizon`` [s].
+    ``supported``: the sphere is in constrained motion (MS_SUPPORTED) for ``seg_left`` [s]
+    more, with the cluster solver's tolerance ``slack`` [m/s] (held_apart)."""
     if moving(walls, w):
         n = walls.planes_n
         gap, cn = moving_gap(x, y, z, r, walls, w, t_now)
         return moving_plane_contact_time(
             gap, u * n[w, 0] + v * n[w, 1] + w_ * n[w, 2], gx * n[w, 0] + gy * n[w, 1]
             + gz * n[w, 2], walls.planes_mot, w, cn, t_now, r, horizon)
-    side = walls.planes_cyl[w, CY_SIDE]
+    v_sum = abs(u) + abs(v) + abs(w_)
+    x_sum = abs(x) + abs(y) + abs(z)
+    p = walls.planes_p
+    if walls.planes_kind[w] == WK_BALL:
+        # a fixed sphere or a corner (hsgran.facets); a sphere in constrained motion that
+        # rests on it meets it no earlier than its segment's end (held_apart, as for a pair)
+        sigma = r + walls.planes_geo[w, BL_RADIUS]
+        dx, dy, dz = x - p[w, 0], y - p[w, 1], z - p[w, 2]
+        if supported and held_apart(dx, dy, dz, u, v, w_, gx, gy, gz, sigma, slack, seg_left):
+            return NEVER
+        return ball_contact_time(dx, dy, dz, u, v, w_, gx, gy, gz, sigma, horizon, v_sum, x_sum)
+    cyl = walls.planes_cyl
+    side = cyl[w, CY_SIDE]
     qx, qy, qz = axis_offset(x, y, z, walls, w)
     ux, uy, uz = across_axis(u, v, w_, walls, w)
     ax, ay, az = across_axis(gx, gy, gz, walls, w)
+    if cyl[w, CY_FINITE] != 0.0:
+        # an edge of a finite wall: its contacts count between its ends (hsgran.facets)
+        a0, a1, a2 = cyl[w, CY_AXIS], cyl[w, CY_AXIS + 1], cyl[w, CY_AXIS + 2]
+        return edge_contact_time(qx, qy, qz, ux, uy, uz, ax, ay, az,
+                                 (x - p[w, 0]) * a0 + (y - p[w, 1]) * a1 + (z - p[w, 2]) * a2,
+                                 u * a0 + v * a1 + w_ * a2, gx * a0 + gy * a1 + gz * a2, r,
+                                 cyl[w, CY_HALF], horizon, v_sum, x_sum)
     return cylinder_contact_time(qx, qy, qz, ux, uy, uz, ax, ay, az,
-                                 walls.planes_cyl[w, CY_RADIUS] - side * r, side, horizon,
-                                 abs(u) + abs(v) + abs(w_), abs(x) + abs(y) + abs(z))
+                                 cyl[w, CY_RADIUS] - side * r, side, horizon, v_sum, x_sum)
 
 
 # long: the hot path of every scene, inlined into the loop at one call site; its steps (cell
@@ -224,21 +285,26 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
             best = tau
             kind = EV_CELL
             partner = 2 * k + (1 if side > 0 else 0)
-    for w in range(planes_p.shape[0]):
+    n_near, first_part = near_walls(i, walls, grid)
+    for k in range(n_near):
+        w = near_wall(k, walls, grid, first_part)
         if w == on_plane:
             continue
         nx = planes_n[w, 0]
         ny = planes_n[w, 1]
         nz = planes_n[w, 2]
-        if walls.planes_kind[w] != WK_PLANE:
+        wkind = walls.planes_kind[w]
+        if wkind != WK_PLANE and wkind != WK_FACE:
             tau = other_wall_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], ri, walls, w,
-                                  t_now, best)
+                                  t_now, best, supported, space.slack[0], seg_end[i] - t_now)
             if tau < best:
                 best = tau
                 kind = EV_WALL
                 partner = w
             continue
         gap = plane_gap(xi, yi, zi, ri, planes_p, planes_n, w)
+        if wkind == WK_FACE and gap < -ri:
+            continue  # behind a face (hsgran.facets)
         if gap <= PLANE_TOUCHING_REL * ri:
             # touching within rounding: a contact now if approaching or pressed (a gap of
             # 1e-19 m closing at 1e-5 m/s would otherwise come 1e-14 s later, after every
@@ -250,6 +316,18 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
                 and vn + min(gn, 0.0) * (seg_end[i] - t_now) >= -space.slack[0]:
             continue  # held by the plane: no contact within the segment (held_apart)
         tau = plane_contact_time(gap, vn, gn)
+        if wkind == WK_FACE and tau < best:
+            # a face's plane met off the face is no contact (hsgran.facets)
+            fu, fv = face_coordinates(xi + tau * (ui + 0.5 * gi[0] * tau),
+                                      yi + tau * (vi + 0.5 * gi[1] * tau),
+                                      zi + tau * (wi + 0.5 * gi[2] * tau), planes_p,
+                                      walls.planes_geo, w)
+            if not on_face(fu, fv, walls.planes_geo, walls.face_lines, w):
+                tau = NEVER
+            elif tau == 0.0 and face_leave_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2],
+                                                planes_p, walls.planes_geo, walls.face_lines,
+                                                w) == 0.0:
+                tau = NEVER  # touching at its outline, leaving it: the edge's (END_OFF)
         if tau < best:
             best = tau
             kind = EV_WALL

@@ -40,12 +40,13 @@ from hsgran._flight import (
     pressed,
     stop_on_plane,
     tc_row,
+    wall_curvature,
     wall_gap,
     wall_normal,
 )
 from hsgran._jit import njit
 from hsgran._observe import book_support, observing
-from hsgran._predict import axis_cells, reschedule_fn
+from hsgran._predict import axis_cells, near_wall, near_walls, reschedule_fn
 from hsgran._state import (
     F_LANDING_SPEED,
     F_TC_TIME,
@@ -419,16 +420,19 @@ def _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, tc):
 
 
 @njit
-def _resting_plane(i, st, walls, gravity, v_land):
+def _resting_plane(i, st, walls, grid, gravity, v_land):
     """A plane that sphere i (in flight) touches within rounding while gravity presses it onto
     it and it moves off or onto it slower than the landing speed ``v_land`` [m/s], or −1. Such
     a sphere lands there at once: the rebound it would make is a landing's (the normal speed
     given up is at most v_land) [OURS]. A sphere wedged between neighbours on a plane and
     hopped off them, slightly upwards, would otherwise meet them again and again before it
     ever came back to the plane."""
-    for w in range(walls.planes_p.shape[0]):
-        if moving(walls, w):
-            continue  # a moving plane meets the sphere at its contact time instead
+    n_near, first_part = near_walls(i, walls, grid)
+    for k in range(n_near):
+        w = near_wall(k, walls, grid, first_part)
+        if moving(walls, w) or not holds_now(walls, w, 0.0, gravity):
+            continue  # a moving plane meets the sphere at its contact time instead; a fixed
+            # sphere holds none
         gap = wall_gap(i, w, st, walls)
         if gap <= PLANE_TOUCHING_REL * st[i, S_R]:
             gn, vn = pressed(i, w, 0.0, st, walls, gravity)
@@ -445,8 +449,8 @@ SETTLE_STOP = 3  #: both stopped on their supports
 
 
 @njit
-def settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
-            rolling, rotation):
+def settle(i, j, nx, ny, nz, t, flight, dyn, walls, grid, gravity, pair_table, fsc, friction,
+           rolling, rotation):
     """The rules that end a slow meeting of spheres i, j (unit normal n from j to i) in rest
     instead of a collision, in this order [OURS]:
 
@@ -465,7 +469,7 @@ def settle(i, j, nx, ny, nz, t, flight, dyn, walls, gravity, pair_table, fsc, fr
     no_end = np.int64(END_NONE)
     for p in (i, j):
         if mstate[p] == MS_FLIGHT:
-            w = _resting_plane(p, st, walls, gravity, v_land)
+            w = _resting_plane(p, st, walls, grid, gravity, v_land)
             if w >= 0:
                 enter_plane(p, w, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
                              friction, rolling, rotation)
@@ -709,7 +713,8 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
     driven = not immovable(walls, w)
     hit = resolve(st[i, S_V:S_V + 3], wi, walls.planes_vel[w], walls.planes_omg[w],
                   planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0, dyn.inv_i[i],
-                  0.0, ri, 0.0, 1.0 / ri, row, rec, plasticity, friction, rolling, adhesion,
+                  0.0, ri, 0.0, wall_curvature(walls, w, ri), row, rec, plasticity, friction,
+                  rolling, adhesion,
                   rotation, False, flags[FL_COMPLIANCE], flags[FL_VISCOUS])
     if hit and ci >= 0.0:
         _backed_velocity(i, vi0x, vi0y, vi0z, (st[i, 3] - vi0x) / inv_mi,

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from hsgran.outlets import OL_SIZE
-from hsgran.wallspec import CY_SIZE, M_SIZE
+from hsgran.wallspec import CY_SIZE, GEO_SIZE, M_SIZE
 
 #: What a prediction needs of every sphere. ``st``: one 64-byte row per sphere (``S_*`` columns
 #: of hsgran._loop: position [m], velocity [m/s], local time [s], radius [m]); ``counter``:
@@ -50,9 +50,14 @@ Dyn = namedtuple("Dyn", "omg inv_m inv_i mat zstreak alpha seg_dir t_last row_tc
 #: cylinder: the normal and surface velocity at its last contact), the prescribed motion
 #: (hsgran.wallspec ``M_*`` columns; kind MOT_FIXED for a fixed plane) and a cylinder's
 #: geometry (``CY_*`` columns); and the outlets, regions where spheres leave the system
-#: (``outlets``: one row of hsgran.outlets ``OL_*`` values each; docs/open-systems.md).
+#: (``outlets``: one row of hsgran.outlets ``OL_*`` values each; docs/open-systems.md). The
+#: parts of finite walls and the fixed spheres (docs/walls.md, "Finite walls") keep their
+#: geometry in ``planes_geo`` (``FC_*`` columns for a face, ``BL_RADIUS`` for a ball) and the
+#: faces' outlines and holes in ``face_lines`` (rows a, b, c of a u + b v ≤ c).
+#: ``global_rows``: the walls every prediction looks at (planes, cylinders, unbounded faces);
+#: the other parts only through the cell lists ``Grid.part_start``, ``Grid.part_items``.
 Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg planes_mot "
-                            "planes_kind planes_cyl outlets")
+                            "planes_kind planes_cyl outlets planes_geo face_lines global_rows")
 #: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic; ``slack``: a
 #: touching contact of a sphere in constrained motion (MS_SUPPORTED, hsgran._cluster) whose
 #: normal velocity stays above −slack[0] [m/s] until its segment ends is no contact event (the
@@ -61,8 +66,11 @@ Space = namedtuple("Space", "gravity box_len periodic slack")
 #: The cell grid (hsgran.events.grid): origin [m], cell size [m], cells per axis, each sphere's
 #: cell, the linked lists (``head``, ``nxt``, ``prv``), and scratch space: 27 list heads and
 #: their image shifts [m], the per-axis list coordinates ``ac`` and shifts ``ah`` [m] of a
-#: prediction, and a stack for waking sleepers.
-Grid = namedtuple("Grid", "origin csize ncell cell head nxt prv heads shifts ac ah stack")
+#: prediction, and a stack for waking sleepers; the cell lists of the parts of finite walls
+#: (hsgran.events.grid.part_lists: list s holds the wall rows ``part_items[part_start[s]:
+#: part_start[s + 1]]``; both empty without such parts).
+Grid = namedtuple("Grid", "origin csize ncell cell head nxt prv heads shifts ac ah stack "
+                          "part_start part_items")
 #: One pending event per entry (sphere, and the frame tick last): time [s], sequence number,
 #: kind (hsgran.events.kinds), partner, the partner's counter at prediction; ``cal`` the event
 #: calendar (hsgran.events.calendar), whose keys are ``ev_t`` and ``ev_seq``.
@@ -247,6 +255,9 @@ class Sizes:
     clusters: bool = False  #: contacts are solved as clusters (scratch for them)
     observables: bool = False  #: stress and wall impulses are summed (hsgran._observe)
     outlets: int = 0  #: outlets
+    lines: int = 0  #: rows of the faces' outlines and holes (hsgran.facets)
+    global_walls: int = 0  #: walls every prediction looks at (``Walls.global_rows``)
+    part_items: int = 0  #: entries of the parts' cell lists (0: no such parts)
     open_system: bool = False  #: spheres may leave or enter (outlets or inflows)
 
     def value(self, symbol) -> int:
@@ -276,6 +287,10 @@ class Sizes:
             "fo": self.frames if self.observables else 0,
             # an open system: which spheres are present (none in a closed one)
             "outlets": self.outlets,
+            "lines": max(self.lines, 1),
+            "gw": self.global_walls,
+            "pi": self.part_items,
+            "ps": self.cells + 1 if self.part_items else 0,
             "op": n if self.open_system else 0,
             "fp": self.frames if self.open_system else 0,
         }[symbol]
@@ -333,6 +348,9 @@ FIELDS = (
     _f("Walls", "planes_mot", "f8", ("planes", M_SIZE)),
     _f("Walls", "planes_kind", "i8", ("planes",)),
     _f("Walls", "planes_cyl", "f8", ("planes", CY_SIZE)),
+    _f("Walls", "planes_geo", "f8", ("planes", GEO_SIZE)),
+    _f("Walls", "face_lines", "f8", ("lines", 3)),
+    _f("Walls", "global_rows", "i8", ("gw",)),
     _f("Walls", "outlets", "f8", ("outlets", OL_SIZE)),
     _f("Space", "gravity", "f8", (3,)),
     _f("Space", "box_len", "f8", (3,)),
@@ -350,6 +368,8 @@ FIELDS = (
     _f("Grid", "ac", "i8", (3, 3)),
     _f("Grid", "ah", "f8", (3, 3)),
     _f("Grid", "stack", "i4", ("g",)),
+    _f("Grid", "part_start", "i8", ("ps",)),
+    _f("Grid", "part_items", "i8", ("pi",)),
     _f("Sched", "ev_t", "f8", ("e",), fill=np.inf, packed=True),
     _f("Sched", "ev_seq", "i8", ("e",), packed=True),
     _f("Sched", "ev_kind", "i1", ("e",), packed=True),

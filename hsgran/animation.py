@@ -35,7 +35,7 @@ from hsgran.onplane import (
     MS_SUPPORTED,
 )
 from hsgran.scene import Plane
-from hsgran.wallspec import cylinder_bounds
+from hsgran.wallspec import WK_FACE, cylinder_bounds
 
 # ---- time sampling -----------------------------------------------------------------------
 
@@ -729,6 +729,80 @@ def wall_patches(planes: list[Plane], lower: np.ndarray, upper: np.ndarray,
                          centre + half_u * u + half_v * v, centre - half_u * u + half_v * v])
         patches.append(WallPatch(quad, n, int(plane.material), 2.0 * half_u, 2.0 * half_v))
     return patches
+
+
+@dataclass(frozen=True)
+class PartSurface:
+    """A face of a finite wall, to draw: its corners and polygons (pyvista's ``faces``
+    layout: a count, then that many corner indices), its normal and material."""
+
+    points: np.ndarray  #: corners [m], shape (K, 3)
+    faces: np.ndarray  #: polygons (int)
+    normal: np.ndarray  #: unit normal, to the side spheres meet [-]
+    material: int
+
+
+def part_surfaces(parts: list, lower: np.ndarray, upper: np.ndarray,
+                  box_lower: np.ndarray | None = None,
+                  box_upper: np.ndarray | None = None) -> list[PartSurface]:
+    """The faces of finite walls to draw (hsgran.shapes.Part of kind WK_FACE; the other parts
+    are not drawn): a polygon as itself; a plane with a hole as the plane's patch
+    (:func:`wall_patches`) less the hole, in triangles between the two outlines (both convex,
+    around the hole's middle)."""
+    out = []
+    for part in parts:
+        if part.kind != WK_FACE:
+            continue
+        outline = part.outline()
+        if len(outline):
+            faces = np.concatenate([[len(outline)], np.arange(len(outline))])
+            out.append(PartSurface(outline, faces, part.normal, part.material))
+            continue
+        hole = part.hole()
+        plane = Plane(part.point, part.normal, part.material, part.key)
+        quad = wall_patches([plane], lower, upper, box_lower, box_upper)[0].corners
+        # the rectangle (in the face's axes) around the patch and the hole, with a margin
+        e1, e2 = part.geo[0:3], part.geo[3:6]
+        uv = np.concatenate([quad, hole]) - part.point
+        u, v = uv @ e1, uv @ e2
+        margin = PATCH_MARGIN * max(np.ptp(u), np.ptp(v))
+        (u0, u1), (v0, v1) = (u.min() - margin, u.max() + margin), (v.min() - margin,
+                                                                     v.max() + margin)
+        outer = part.point + np.array([[a, b] for a, b in ((u0, v0), (u1, v0), (u1, v1),
+                                                           (u0, v1))]) @ np.array([e1, e2])
+        out.append(PartSurface(*_annulus(outer, hole, part.point, e1, e2), part.normal,
+                               part.material))
+    return out
+
+
+def _annulus(outer: np.ndarray, inner: np.ndarray, centre, e1, e2) -> tuple:
+    """Triangles between two convex outlines around ``centre`` (in the plane of axes e1, e2):
+    both are walked once round by angle about the centre from the same ray, each step joining
+    the next corner of the outline whose next corner comes first. Returns (points, faces)."""
+    points = np.concatenate([outer, inner])
+
+    def walk(corners, offset, start):
+        d = corners - centre
+        angle = np.mod(np.arctan2(d @ e2, d @ e1) - start, 2.0 * np.pi)
+        order = np.argsort(angle, kind="stable")
+        # once round, back to the first corner a turn later
+        return (np.append(order, order[0]) + offset, np.append(angle[order],
+                                                               angle[order[0]] + 2.0 * np.pi))
+
+    d0 = outer[0] - centre
+    start = math.atan2(float(d0 @ e2), float(d0 @ e1))
+    o, ao = walk(outer, 0, start)
+    h, ah = walk(inner, len(outer), start)
+    faces = []
+    i = j = 0
+    while i < len(outer) or j < len(inner):
+        if j == len(inner) or (i < len(outer) and ao[i + 1] <= ah[j + 1]):
+            faces += [3, o[i], o[i + 1], h[j]]
+            i += 1
+        else:
+            faces += [3, o[i], h[j + 1], h[j]]
+            j += 1
+    return points, np.array(faces, dtype=np.int64)
 
 
 def _box_face(plane: Plane, box_lower, box_upper) -> bool:

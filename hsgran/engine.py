@@ -47,10 +47,11 @@ from hsgran.contact import compliance, viscous
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
 from hsgran.events.calendar import calendar_build, new_calendar
-from hsgran.events.grid import cell_coordinates, insert_all, plan_grid, remove, slot_of
+from hsgran.events.grid import cell_coordinates, insert_all, part_lists, plan_grid, remove, slot_of
 from hsgran.inflow import place_batch
 from hsgran.materials import P_E_FIXED, P_VISC, SOLID_SPHERE_INERTIA
 from hsgran.onplane import CONVENTION_A, CONVENTION_B
+from hsgran.shapes import tables
 from hsgran.wallspec import WK_CYLINDER, WK_MOVING, cylinder_bounds
 
 #: Bytes of frame buffer the engine may hold; frames are handed to observers when it is full.
@@ -74,8 +75,9 @@ EVENTS_PER_CALL = 200_000
 #: ``planes_kind`` and ``planes_cyl``; 10: the cluster solves' warm-start forces ``wm_q`` and
 #: ``wm_f``; 11: open systems: the outlets and each sphere's presence, ``outlets`` and
 #: ``present``, the energy carried out and brought in, ``F_EXITED`` and ``F_ENTERED``, and the
-#: inflows' progress ``inflow_state``).
-CHECKPOINT_VERSION = 11
+#: inflows' progress ``inflow_state``; 12: the finite walls and fixed spheres, ``planes_geo``
+#: and ``face_lines``, and the edges' column ``CY_FINITE`` of ``planes_cyl``).
+CHECKPOINT_VERSION = 12
 
 
 class SimulationError(HsgranError):
@@ -273,6 +275,37 @@ def _grid_plan(scene, brute_force: bool):
     return origin, csize, ncell, box_len
 
 
+#: The box of a part of a finite wall is grown by the largest radius and this share of it
+#: more [-] before it is listed in the cells it meets (events.grid.part_lists): a centre a
+#: radius away from the part, rounded by ~1e-16 of its coordinates, is still inside it.
+PART_REACH_REL = 1e-9
+
+
+def _wall_lists(scene, origin, csize, ncell):
+    """(the walls every prediction looks at, the parts' cell lists ``start``, ``items``): the
+    planes, cylinders and unbounded faces are looked at always, the other parts of finite
+    walls (and the fixed spheres) through the cells their box meets, grown by the largest
+    radius (events.grid.part_lists)."""
+    n_fixed = len(scene.planes) + len(scene.cylinders)
+    rows = list(range(n_fixed))
+    local, lower, upper = [], [], []
+    reach = float(np.max(scene.radius)) * (1.0 + PART_REACH_REL)
+    for k, q in enumerate(scene.parts, start=n_fixed):
+        box = q.bounds()
+        if box is None:
+            rows.append(k)
+        else:
+            local.append(k)
+            lower.append(box[0] - reach)
+            upper.append(box[1] + reach)
+    rows = np.array(rows, dtype=np.int64)
+    if not local:
+        return rows, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    start, items = part_lists(np.array(lower), np.array(upper), origin, csize, ncell,
+                              np.asarray(scene.periodic, dtype=bool))
+    return rows, start, np.array(local, dtype=np.int64)[items]
+
+
 def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
     """Write the scene's values into freshly allocated state arrays (hsgran._state.allocate):
     the spheres' rows, spins, inverse masses, materials, accelerations, the planes, gravity,
@@ -304,6 +337,14 @@ def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
         a["planes_mat"][k] = c.material
         a["planes_kind"][k] = WK_CYLINDER
         a["planes_cyl"][k] = c.row()
+    if scene.parts:  # the parts of finite walls and the fixed spheres (hsgran.shapes)
+        rows = slice(len(scene.planes) + len(scene.cylinders), None)
+        t = tables(scene.parts)
+        a["planes_p"][rows], a["planes_n"][rows], a["planes_kind"][rows] = (t.point, t.normal,
+                                                                             t.kind)
+        a["planes_cyl"][rows], a["planes_geo"][rows] = t.cyl, t.geo
+        a["planes_mat"][rows] = [q.material for q in scene.parts]
+        a["face_lines"][:len(t.lines)] = t.lines
     for k, o in enumerate(scene.outlets):
         a["outlets"][k] = o.row
     present = _present(scene)
@@ -359,6 +400,7 @@ class Simulation:
         self.pair_table = np.ascontiguousarray(scene.pair_table())
         self.notes = scene_notes(scene, self.pair_table)  #: see RunSummary.notes
         origin, csize, ncell, box_len = _grid_plan(scene, brute_force)
+        global_rows, part_start, part_items = _wall_lists(scene, origin, csize, ncell)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
         sizes = Sizes(n=n, gravity=bool(eff.gravity), rotation=self.rotation,
                       planes=len(scene.walls), cells=int(np.prod(ncell)),
@@ -368,6 +410,8 @@ class Simulation:
                       log=LOG_BUFFER if self.log_events else 1,
                       clusters=bool(self.flags[es.FL_CLUSTERS]),
                       observables=bool(scene.observables), outlets=len(scene.outlets),
+                      lines=sum(len(q.lines) for q in scene.parts),
+                      global_walls=len(global_rows), part_items=len(part_items),
                       open_system=scene.open_system)
         if large is None:
             large = n >= LARGE_FROM
@@ -375,6 +419,9 @@ class Simulation:
         a["origin"][:], a["csize"][:], a["ncell"][:], a["box_len"][:] = (origin, csize, ncell,
                                                                           box_len)
         _fill_from_scene(a, scene, self.mass)
+        a["global_rows"][:] = global_rows
+        if len(part_items):
+            a["part_start"][:], a["part_items"][:] = part_start, part_items
         if self.flags[es.FL_CLUSTERS]:
             a["slack"][0] = slack(scene.effective_landing_speed)
         # one pending event per sphere, entry n is the frame tick

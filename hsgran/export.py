@@ -186,9 +186,10 @@ def _any_moving(traj) -> bool:
 
 
 def _write_walls(pv, traj, out: Path, t: float = 0.0, name: str = "walls.vtp") -> Path | None:
-    """The plane walls as quadrilaterals, moving planes where they are at time t [s], and
-    the cylinders as tubes of quadrilaterals (normals towards the spheres)."""
-    from hsgran.render import CYLINDER_SEGMENTS, wall_cylinders, wall_planes
+    """The plane walls as quadrilaterals, moving planes where they are at time t [s], the
+    cylinders as tubes of quadrilaterals (normals towards the spheres), the faces of finite
+    walls as polygons and the fixed spheres as spheres."""
+    from hsgran.render import CYLINDER_SEGMENTS, part_meshes, wall_cylinders, wall_planes
 
     planes, _ = wall_planes(traj)
     meshes = []
@@ -213,6 +214,7 @@ def _write_walls(pv, traj, out: Path, t: float = 0.0, name: str = "walls.vtp") -
         tube.cell_data["normal"] = -q if cyl.inside else q
         tube.cell_data["material"] = np.full(tube.n_cells, cyl.material, dtype=np.int32)
         meshes.append(tube)
+    meshes += part_meshes(pv, traj)  # the faces of finite walls and the fixed spheres
     if not meshes:
         return None
     mesh = meshes[0] if len(meshes) == 1 else pv.merge(meshes)

@@ -342,10 +342,12 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
 # long: one walk over the pieces of a quartic, bracketing at each step; split, the pieces'
 # bounds would travel between functions as tuples
 @njit
-def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, c4, c3, c2, c1, h, touching):
+def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, c4, c3, c2, c1, h, touching,
+                after=0.0):
     """First τ in [0, h] where f = sgn (|r + wτ + ½aτ²|² − σ²) (coefficients c4 … c1 of τ⁴ …
     τ, sign included) falls through zero; ``inf`` if none. ``touching``: f(0) is round-off, so
-    the piece from τ = 0 is not searched."""
+    the piece from τ = 0 is not searched. ``after``: a crossing already found; only the
+    pieces that start at or after it are searched (the next crossing, hsgran.facets)."""
     # critical points of f' (zeros of f'' = 12 c4 τ² + 6 c3 τ + 2 c2) split [0, h] into up to
     # three pieces on which f' is monotone; the zeros of f' found there split it into pieces
     # where f is, which are searched in order as they are found (scalars, not arrays: this runs
@@ -379,13 +381,13 @@ def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, c4, c3, c2, c1, h, 
         fhi = _dpoly(c4, c3, c2, c1, hi)
         if (flo > 0.0) != (fhi > 0.0) and flo != 0.0 and fhi != 0.0:
             b = _dpoly_root(c4, c3, c2, c1, lo, hi)
-            if b > a and not (touching and first):
+            if b > a and a >= after and not (touching and first):
                 found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, b)
                 if found:
                     return tau
             a = b
             first = False
-    if h > a and not (touching and first):
+    if h > a and a >= after and not (touching and first):
         found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, h)
         if found:
             return tau

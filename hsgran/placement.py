@@ -40,7 +40,18 @@ from hsgran.events.grid import (
     plan_grid,
     slot_of,
 )
-from hsgran.wallspec import CY_AXIS, CY_RADIUS, CY_SIDE, CY_SIZE
+from hsgran.facets import face_coordinates, on_face
+from hsgran.shapes import PartTables, tables
+from hsgran.wallspec import (
+    BL_RADIUS,
+    CY_AXIS,
+    CY_HALF,
+    CY_RADIUS,
+    CY_SIDE,
+    CY_SIZE,
+    WK_BALL,
+    WK_FACE,
+)
 
 #: Relative tolerance of the overlap and wall-penetration checks. Spheres written by hand as
 #: touching (centre distance = R1 + R2 in decimal) differ from exact contact by a few ulp after
@@ -101,6 +112,8 @@ class Space:
         period: Length of the box along each periodic axis, 0 along the others [m], shape (3,).
         cyl_center: The middle of each cylinder's axis [m], shape (C, 3).
         cyl_row: Each cylinder's hsgran.wallspec ``CY_*`` row, shape (C, CY_SIZE).
+        parts: The faces, edges and corners of finite walls and the fixed spheres
+            (hsgran.shapes.tables).
     """
 
     plane_point: np.ndarray
@@ -109,6 +122,7 @@ class Space:
     period: np.ndarray
     cyl_center: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     cyl_row: np.ndarray = field(default_factory=lambda: np.zeros((0, CY_SIZE)))
+    parts: PartTables = field(default_factory=lambda: tables(()))
 
     @property
     def periodic(self) -> np.ndarray:
@@ -224,8 +238,10 @@ def random_sequential_addition(rng, radii, lower, upper, placed_position, placed
     while state[0] < n and attempts < budget:
         block = int(min(budget - attempts, max(FILL_MIN_BLOCK, 2 * (n - state[0]))))
         u = rng.random((block, 3))
+        pt = space.parts
         attempts += _rsa_kernel(u, order, radii, lower, upper, space.plane_point,
                                 space.plane_normal, space.cyl_center, space.cyl_row,
+                                pt.kind, pt.point, pt.normal, pt.geo, pt.cyl, pt.lines,
                                 grid_position, grid_radius, head, nxt, prv, origin, size, ncell,
                                 period, positions, state, scratch, near)
     return positions, attempts
@@ -282,6 +298,7 @@ def _pair_distance(delta: np.ndarray, space: Space) -> np.ndarray:
 
 @njit
 def _rsa_kernel(u, order, radii, lower, upper, plane_point, plane_normal, cyl_center, cyl_row,
+                part_kind, part_point, part_normal, part_geo, part_cyl, part_lines,
                 grid_position, grid_radius, head, nxt, prv, origin, size, ncell, period,
                 positions, state, x, near):
     """Consume uniform triples ``u`` as candidate centres; returns how many were used.
@@ -302,6 +319,9 @@ def _rsa_kernel(u, order, radii, lower, upper, plane_point, plane_normal, cyl_ce
         if not _clear_of_planes(x, r, plane_point, plane_normal):
             continue
         if not _clear_of_cylinders(x, r, cyl_center, cyl_row):
+            continue
+        if not _clear_of_parts(x, r, part_kind, part_point, part_normal, part_geo, part_cyl,
+                               part_lines):
             continue
         if not _clear_of_spheres(x, r, grid_position, grid_radius, head, nxt, origin, size,
                                  ncell, period, near):
@@ -344,6 +364,36 @@ def _clear_of_cylinders(x, r, cyl_center, cyl_row):
         gap = cyl_row[q, CY_SIDE] * (cyl_row[q, CY_RADIUS] - math.sqrt(d2))
         if gap < r:
             return False
+    return True
+
+
+@njit
+def _clear_of_parts(x, r, kind, point, normal, geo, cyl, lines):
+    """Whether a sphere (centre ``x``, radius ``r``) is clear of every part of the finite walls
+    and every fixed sphere: its distance from a fixed sphere's centre at least r + R, from an
+    edge's segment at least r, and from a face's plane at least r where its foot is on the
+    face (hsgran.shapes.Part.distance)."""
+    for q in range(kind.shape[0]):
+        d0 = x[0] - point[q, 0]
+        d1 = x[1] - point[q, 1]
+        d2 = x[2] - point[q, 2]
+        if kind[q] == WK_BALL:
+            if d0 * d0 + d1 * d1 + d2 * d2 < (r + geo[q, BL_RADIUS]) ** 2:
+                return False
+        elif kind[q] == WK_FACE:
+            height = d0 * normal[q, 0] + d1 * normal[q, 1] + d2 * normal[q, 2]
+            if abs(height) < r:
+                u, v = face_coordinates(x[0], x[1], x[2], point, geo, q)
+                if on_face(u, v, geo, lines, q):
+                    return False
+        else:  # an edge
+            s = min(max(d0 * cyl[q, CY_AXIS] + d1 * cyl[q, CY_AXIS + 1]
+                        + d2 * cyl[q, CY_AXIS + 2], -cyl[q, CY_HALF]), cyl[q, CY_HALF])
+            e0 = d0 - s * cyl[q, CY_AXIS]
+            e1 = d1 - s * cyl[q, CY_AXIS + 1]
+            e2 = d2 - s * cyl[q, CY_AXIS + 2]
+            if e0 * e0 + e1 * e1 + e2 * e2 < r * r:
+                return False
     return True
 
 

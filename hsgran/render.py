@@ -49,6 +49,7 @@ from hsgran.animation import (
     nice_spacing,
     nice_step_above,
     parse_camera,
+    part_surfaces,
     resolve_camera,
     sample_times,
     scene_extent,
@@ -58,7 +59,17 @@ from hsgran.animation import (
 from hsgran.errors import InputError, MissingDependency
 from hsgran.io.h5md import read_trajectory
 from hsgran.scene import Cylinder, Plane, parse_scene
-from hsgran.wallspec import CY_AXIS, CY_HALF, CY_OMEGA, CY_RADIUS, CY_SIDE, M_KIND, MOT_FIXED
+from hsgran.wallspec import (
+    BL_RADIUS,
+    CY_AXIS,
+    CY_HALF,
+    CY_OMEGA,
+    CY_RADIUS,
+    CY_SIDE,
+    M_KIND,
+    MOT_FIXED,
+    WK_BALL,
+)
 
 # ---- environment -------------------------------------------------------------------------
 
@@ -129,6 +140,10 @@ CHECKER_TEXELS = 64
 #: Facets around a cylinder wall, and the stripes along it (an even number; they show a drum
 #: turn).
 CYLINDER_SEGMENTS = 96
+#: Segments around a fixed sphere's mesh (half as many from pole to pole): smooth at the
+#: sizes a bed of fixed spheres is seen at, and a bed of thousands stays a few hundred
+#: thousand triangles.
+FIXED_SPHERE_SEGMENTS = 16
 CYLINDER_STRIPES = 24
 #: Walls are shaded by a light fixed in the world, from above, front and right (a direction,
 #: normalised at use), with this share of ambient light [-]: a floor is brightest and the walls
@@ -326,7 +341,8 @@ def wall_planes(traj) -> tuple[list[Plane], str]:
         planes = [Plane(walls.point[k], walls.normal[k], int(walls.material[k]), walls.key[k],
                         None if motion is None or motion[k, M_KIND] == MOT_FIXED
                         else motion[k])
-                  for k in range(len(walls)) if not walls.is_cylinder(k)]
+                  for k in range(len(walls))
+                  if not walls.is_cylinder(k) and not walls.is_part(k)]
         return planes, traj.scene_name
     try:
         # the stored text ends with comment lines naming the overrides, which TOML ignores
@@ -365,6 +381,58 @@ def wall_cylinders(traj) -> list[Cylinder]:
                                 float(row[CY_HALF]), bool(row[CY_SIDE] > 0.0),
                                 float(row[CY_OMEGA]), int(walls.material[k]), walls.key[k]))
     return out
+
+
+def wall_parts(traj) -> list:
+    """The parts of the finite walls and the fixed spheres (hsgran.shapes.Part), from the
+    file's walls (or its scene text, as :func:`wall_planes`)."""
+    walls = traj.walls
+    if walls is None:
+        try:
+            return list(parse_scene(traj.scene_text, overrides=traj.overrides or None).parts)
+        except InputError:
+            return []  # wall_planes has warned
+    return [walls.part(k) for k in range(len(walls)) if walls.is_part(k)]
+
+
+def part_meshes(pv, traj) -> list:
+    """pyvista meshes of the faces of finite walls and of the fixed spheres (with a cell
+    array ``normal`` and ``material``); edges and corners are not drawn."""
+    parts = wall_parts(traj)
+    if not parts:
+        return []
+    lower, upper = scene_extent(traj)
+    meshes = []
+    surfaces = part_surfaces(parts, lower, upper, traj.box_lower, traj.box_upper)
+    if surfaces:  # one mesh of every face (a mesh wall has many)
+        points, faces, normal, material = [], [], [], []
+        start = 0
+        for surface in surfaces:
+            f = surface.faces.copy()
+            k = 0
+            while k < len(f):  # shift the corner indices of each polygon
+                f[k + 1:k + 1 + f[k]] += start
+                normal.append(surface.normal)
+                material.append(surface.material)
+                k += 1 + f[k]
+            points.append(surface.points)
+            faces.append(f)
+            start += len(surface.points)
+        mesh = pv.PolyData(np.concatenate(points), faces=np.concatenate(faces))
+        mesh.cell_data["normal"] = np.array(normal, dtype=np.float64)
+        mesh.cell_data["material"] = np.array(material, dtype=np.int32)
+        meshes.append(mesh)
+    for part in parts:
+        if part.kind == WK_BALL and part.geo[BL_RADIUS] > 0.0:
+            ball = pv.Sphere(radius=float(part.geo[BL_RADIUS]), center=part.point,
+                             theta_resolution=FIXED_SPHERE_SEGMENTS,
+                             phi_resolution=FIXED_SPHERE_SEGMENTS // 2)
+            normal = np.asarray(ball.cell_normals, dtype=np.float64)
+            ball.clear_data()  # (float32 "Normals": merged, the cell normals would be dropped)
+            ball.cell_data["normal"] = normal
+            ball.cell_data["material"] = np.full(ball.n_cells, part.material, dtype=np.int32)
+            meshes.append(ball)
+    return meshes
 
 
 class Renderer:
@@ -418,6 +486,7 @@ class Renderer:
         self.plotter.set_background(BACKGROUND)
         self._add_walls(planes)
         self._add_cylinders(wall_cylinders(traj))
+        self._add_parts()
         if self.mesh_mode:
             self._add_mesh_spheres()
         else:
@@ -467,6 +536,21 @@ class Renderer:
             bounds = [c for a in range(3) for c in (traj.box_lower[a], traj.box_upper[a])]
             self.plotter.add_mesh(pv.Box(bounds).outline(), color=EDGE_COLOR,
                                   line_width=EDGE_WIDTH)
+
+    def _add_parts(self) -> None:
+        """The faces of finite walls (both sides, shaded by a fixed light as the planes) and
+        the fixed spheres, in the walls' grey; merged into one mesh (a mesh of many
+        triangles, a bed of many fixed spheres)."""
+        meshes = part_meshes(self._pv, self.traj)
+        if not meshes:
+            return
+        mesh = meshes[0] if len(meshes) == 1 else self._pv.merge(meshes)
+        light = np.asarray(WALL_LIGHT, dtype=float) / np.linalg.norm(WALL_LIGHT)
+        shade = WALL_AMBIENT + (1.0 - WALL_AMBIENT) * np.abs(mesh.cell_data["normal"] @ light)
+        grey = np.asarray(CHECKER_COLORS[0], dtype=float)
+        mesh.cell_data["rgb"] = np.clip(np.outer(shade, grey), 0, 255).astype(np.uint8)
+        self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, lighting=False,
+                              show_scalar_bar=False)
 
     def _add_cylinders(self, cylinders: list[Cylinder]) -> None:
         """Each cylinder as a tube with stripes along its axis (they show it turn), seen from

@@ -77,6 +77,7 @@ from pathlib import Path
 
 import numpy as np
 
+from hsgran import shapes
 from hsgran.effects import Effects
 from hsgran.errors import InputError, check_number, check_positive, did_you_mean, short_repr
 
@@ -96,6 +97,7 @@ from hsgran.overrides import apply_overrides, names_override
 from hsgran.placement import CONTACT_TOLERANCE, Fill, Space, fill_spheres, overlapping_pairs
 from hsgran.system import available_memory
 from hsgran.wallspec import (
+    BL_RADIUS,
     CY_AXIS,
     CY_HALF,
     CY_OMEGA,
@@ -111,6 +113,7 @@ from hsgran.wallspec import (
     M_TRAVEL,
     MOT_OSCILLATION,
     MOT_VELOCITY,
+    WK_BALL,
     wall_shift,
 )
 
@@ -177,7 +180,7 @@ ROLLING_CONVENTIONS = {"A": "rolling torque also while sliding",
                        "B": "rolling torque only while rolling"}
 SCENE_KEYS = ("name", "duration", "gravity", "effects", "seed", "periodic")
 OUTPUT_KEYS = ("frame_interval", "observables")
-PLANE_KEYS = ("kind", "point", "normal", "material", "motion")
+PLANE_KEYS = ("kind", "point", "normal", "material", "motion", "hole")
 BOX_KEYS = ("kind", "lower", "upper", "material", "motion")
 #: Prescribed motions of a plane (hsgran.wallmotion) and the keys of each.
 MOTION_KEYS = {"oscillation": ("kind", "amplitude", "frequency", "phase", "direction"),
@@ -186,9 +189,28 @@ BOX_FACES = tuple(f"{side}_{axis}" for axis in "xyz" for side in ("lower", "uppe
 CYLINDER_KEYS = ("kind", "center", "axis", "radius", "length", "side", "caps",
                  "angular_velocity", "material")
 CYLINDER_SIDES = ("inside", "outside")
-WALL_KINDS = ("plane", "box", "cylinder")
-PARTICLE_KEYS = ("material", "radius", "position", "velocity", "angular_velocity")
-FILL_KEYS = ("count", "material", "radius", "region", "speed", "angular_velocity")
+WALL_KINDS = ("plane", "box", "cylinder", "polygon", "disk", "sphere", "mesh")
+#: Keys of the finite walls and fixed spheres (docs/walls.md, "Finite walls").
+POLYGON_KEYS = ("kind", "vertices", "material", "faces")
+DISK_KEYS = ("kind", "center", "normal", "radius", "material", "faces", "corners")
+SPHERE_KEYS = ("kind", "center", "radius", "material")
+MESH_KEYS = ("kind", "file", "material", "faces", "scale", "offset")
+#: Most triangles a mesh wall may have: each is up to 7 engine wall rows (two faces, three
+#: edges, corners shared), and a contact search looks only at those listed near the sphere.
+MAX_TRIANGLES = 1_000_000
+#: Keys of a plane's hole: a circle (a regular polygon of its area) or a rectangle.
+HOLE_KEYS = {"circle": ("shape", "center", "radius", "corners"),
+             "rectangle": ("shape", "center", "size", "axis")}
+#: Which sides of a polygon or a disk spheres meet: both, or the front only (the side its
+#: vertices turn counter-clockwise about, or its normal's).
+FACE_SIDES = ("both", "front")
+#: Most corners of a regular polygon standing for a circle.
+MAX_CORNERS = 4096
+PARTICLE_KEYS = ("material", "radius", "position", "velocity", "angular_velocity", "fixed")
+FILL_KEYS = ("count", "material", "radius", "region", "speed", "angular_velocity", "fixed")
+#: The random stream (with the scene's seed) that places fills of fixed spheres; they are
+#: placed before the other fills, which keep theirs (docs/walls.md, "Finite walls").
+FIXED_FILL_STREAM = 1
 REGION_KEYS = ("lower", "upper")
 #: Most spheres an inflow's rate may ask for over a run: its counts round(rate·interval·(k+1))
 #: stay exact integers far below this (2⁵³), and no table could hold more.
@@ -340,6 +362,8 @@ class Scene:
             (``[output] observables``, docs/observables.md).
         cylinders: The cylinder walls; the engine's wall rows are ``planes`` then these
             (:attr:`walls`).
+        parts: The faces, edges and corners of the finite walls and the fixed spheres
+            (:class:`hsgran.shapes.Part`), the engine's last wall rows.
         outlets: Regions where spheres leave the system (:class:`Outlet`).
         inflows: Spheres inserted during the run (:class:`hsgran.inflow.Inflow`); the rows an
             inflow owns come last in the particle table, absent (NaN position) until inserted.
@@ -375,6 +399,7 @@ class Scene:
     overrides: dict = field(default_factory=dict)
     observables: bool = False
     cylinders: tuple = ()
+    parts: tuple = ()
     outlets: tuple = ()
     inflows: tuple = ()
     present: np.ndarray | None = None
@@ -387,8 +412,9 @@ class Scene:
 
     @property
     def walls(self) -> tuple:
-        """Every wall in the order of the engine's wall rows: the planes, then the cylinders."""
-        return tuple(self.planes) + tuple(self.cylinders)
+        """Every wall in the order of the engine's wall rows: the planes, the cylinders, then
+        the parts of the finite walls and the fixed spheres."""
+        return tuple(self.planes) + tuple(self.cylinders) + tuple(self.parts)
 
     @property
     def effective_landing_speed(self) -> float:
@@ -720,11 +746,16 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     enduring = _parse_enduring(doc)
     library = MaterialLibrary()
     library.add_tables(doc, origin=source)
-    walls = _parse_walls(doc, library, head.periodic)
+    walls = _parse_walls(doc, library, head.periodic, source)
     outlets = _parse_outlets(doc, head.periodic, None if walls.box_key is None
                              else (walls.box_lower, walls.box_upper))
     particles = _parse_particles(doc, library, head.effects)
-    fills = _parse_fills(doc, library, head.effects, walls)
+    fixed = [p for p in particles if p["fixed"]]  # (walls: hsgran.shapes.ball)
+    particles = [p for p in particles if not p["fixed"]]
+    fixed_keys: set = set()
+    fills = _parse_fills(doc, library, head.effects, walls, fixed_keys)
+    fixed_fills = [f for f in fills if f.key in fixed_keys]  # (walls, placed first)
+    fills = [f for f in fills if f.key not in fixed_keys]
     inflows = _parse_inflows(doc, library, walls, frame_interval, head.duration)
     _check_total(len(particles), [(f.key, f.count) for f in fills]
                  + [(f["key"], f["count"]) for f in inflows])
@@ -735,33 +766,44 @@ def _build(doc: dict, text: str, source: str) -> Scene:
 
     sphere_materials = _unique([p["material"] for p in particles] + [f.material for f in fills]
                                + [f["material"] for f in inflows if not f["recirculate"]])
-    material_names = _unique(sphere_materials + _wall_materials(walls, head.periodic))
+    material_names = _unique(sphere_materials + _wall_materials(walls, head.periodic)
+                             + [p["material"] for p in fixed] + [f.material for f in fixed_fills])
     names = _sphere_names(particles, fills)
     explicit = _explicit_spheres(particles, material_names)
     planes = _make_planes(walls, head.periodic, material_names)
     cylinders = _make_cylinders(walls, material_names)
+    parts = _make_parts(walls, material_names, fixed)
     _check_moving(planes, cylinders, enduring.treatment)
-    space = _space(planes, cylinders, walls, head.periodic)
+    space = _space(planes, cylinders, parts, walls, head.periodic)
 
     # everything that does not need the fills' positions, before the (costly) placement
-    _check_grid(walls, head.periodic, np.concatenate([
-        explicit.radius, [f.radius[1] for f in fills],
-        [f["radius"][1] for f in inflows if not f["recirculate"]]]))
+    radii = np.concatenate([explicit.radius, [f.radius[1] for f in fills],
+                            [f["radius"][1] for f in inflows if not f["recirculate"]]])
+    _check_grid(walls, head.periodic, radii)
+    if fixed_fills:
+        parts = _place_fixed(head.seed, fixed_fills, explicit, space, parts, material_names)
+        space = _space(planes, cylinders, parts, walls, head.periodic)
+    if any(head.periodic) and parts:
+        parts = _periodic_images(parts, walls, head.periodic, float(radii.max(initial=0.0)))
+        space = _space(planes, cylinders, parts, walls, head.periodic)
     _check_explicit(walls, head.periodic, explicit.position, names)
     _check_overlaps(explicit.position, explicit.radius, space, names)
-    _check_planes(planes + list(cylinders), explicit.position, explicit.radius, names)
+    _check_planes(planes + list(cylinders) + list(parts), explicit.position, explicit.radius,
+                  names)
     counts = _sphere_counts(explicit, fills, material_names)
     for f in inflows:  # an inflow's spheres meet the same walls and spheres
         if not f["recirculate"]:
             counts[material_names.index(f["material"])] += f["count"]
-    _check_friction(head.effects, library, material_names, counts, planes + list(cylinders))
+    _check_friction(head.effects, library, material_names, counts,
+                    planes + list(cylinders) + list(parts))
     _check_plasticity(doc, head.effects, sphere_materials)
 
     spheres = _place_fills(head.seed, fills, explicit, space, material_names)
     if fills:
         # placement guarantees both; re-checking all spheres costs little and guards it
         _check_overlaps(spheres.position, spheres.radius, space, names)
-        _check_planes(planes + list(cylinders), spheres.position, spheres.radius, names)
+        _check_planes(planes + list(cylinders) + list(parts), spheres.position, spheres.radius,
+                      names)
     _check_outlets(outlets, spheres.position, names)
     n_present = spheres.radius.shape[0]
     inflow_rows, reserve = _reserve_rows(head.seed, inflows, n_present, material_names)
@@ -799,6 +841,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
         treatment=enduring.treatment,
         observables=observables,
         cylinders=cylinders,
+        parts=parts,
         outlets=outlets,
         inflows=inflow_rows,
         present=np.arange(spheres.radius.shape[0]) < n_present,
@@ -896,7 +939,8 @@ def _material_name(library: MaterialLibrary, value, key: str) -> str:
 
 # -- [[walls]] --
 
-def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls:
+def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple,
+                 source: str = "<string>") -> _Walls:
     entries: list[dict] = []
     box_lower = box_upper = None
     box_key: str | None = None
@@ -905,6 +949,12 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
         kind = _kind(w, key, WALL_KINDS, "wall kind", "'plane' or 'box'")
         if kind == "cylinder":
             entries.append(_parse_cylinder(w, key, library, periodic))
+            continue
+        if kind in ("polygon", "disk", "sphere"):
+            entries.append(_parse_finite(w, key, kind, library))
+            continue
+        if kind == "mesh":
+            entries.append(_parse_mesh(w, key, library, source))
             continue
         if kind == "plane":
             _check_keys(w, PLANE_KEYS, key)
@@ -915,8 +965,11 @@ def _parse_walls(doc: dict, library: MaterialLibrary, periodic: tuple) -> _Walls
                 library, _require(w, "material", key, "a material name"), f"{key}.material")
             motion = (_parse_motion(w["motion"], f"{key}.motion", normal)
                       if "motion" in w else None)
-            entries.append(dict(kind=kind, key=key, point=point,
-                                normal=normal, material=material, motion=motion))
+            hole = _parse_hole(w["hole"], f"{key}.hole", point, normal) if "hole" in w else None
+            if hole is not None and motion is not None:
+                raise InputError("a plane with a hole cannot move yet", f"{key}.motion")
+            entries.append(dict(kind=kind, key=key, point=point, normal=normal,
+                                material=material, motion=motion, hole=hole))
         else:
             _check_keys(w, BOX_KEYS, key)
             if box_key is not None:
@@ -971,6 +1024,166 @@ def _parse_outlets(doc: dict, periodic: tuple, box=None) -> tuple:
                                      "spheres' coordinates wrap there)", f"{key}.upper")
         outlets.append(Outlet(row, key))
     return tuple(outlets)
+
+
+def _parse_finite(w: dict, key: str, kind: str, library: MaterialLibrary) -> dict:
+    """A ``polygon``, ``disk`` or ``sphere`` entry → its checked values: the corners of its
+    face, or a fixed sphere's centre and radius (docs/walls.md, "Finite walls")."""
+    _check_keys(w, {"polygon": POLYGON_KEYS, "disk": DISK_KEYS, "sphere": SPHERE_KEYS}[kind],
+                key)
+    material = _material_name(library, _require(w, "material", key, "a material name"),
+                              f"{key}.material")
+    if kind == "sphere":
+        center = _vector(_require(w, "center", key, "[x, y, z] in m"), f"{key}.center")
+        radius = check_positive(_require(w, "radius", key, "in m"), f"{key}.radius", "m")
+        return dict(kind=kind, key=key, center=center, radius=radius, material=material)
+    faces = _string(w.get("faces", "both"), f"{key}.faces")
+    if faces not in FACE_SIDES:
+        raise InputError(f"unknown side '{faces}'{did_you_mean(faces, FACE_SIDES)}; known: "
+                         f"{', '.join(FACE_SIDES)}", f"{key}.faces")
+    if kind == "polygon":
+        value = _require(w, "vertices", key, "a list of [x, y, z] in m, in order around it")
+        if not isinstance(value, list) or len(value) < shapes.MIN_SIDES:
+            raise InputError(f"must be a list of at least {shapes.MIN_SIDES} points [x, y, z] "
+                             f"in m, got {short_repr(value)}", f"{key}.vertices")
+        corners = np.array([_vector(v, f"{key}.vertices[{i}]") for i, v in enumerate(value)])
+        corner_key = f"{key}.vertices"
+    else:
+        center = _vector(_require(w, "center", key, "[x, y, z] in m"), f"{key}.center")
+        normal = _direction(w, "normal", key, "its front side")
+        radius = check_positive(_require(w, "radius", key, "in m"), f"{key}.radius", "m")
+        corners = shapes.regular_polygon(center, normal, radius, _corner_count(w, key))
+        corner_key = f"{key}.radius"
+    try:
+        shapes.polygon(corners, 0, key)  # (the checks of its corners)
+    except ValueError as exc:
+        raise InputError(str(exc), corner_key) from None
+    return dict(kind="polygon", key=key, corners=corners, both=faces == "both",
+                material=material)
+
+
+def _parse_mesh(w: dict, key: str, library: MaterialLibrary, source: str) -> dict:
+    """A ``mesh`` entry → its triangles [m] (T, 3, 3): an STL file (or any format trimesh
+    reads) relative to the scene file's folder, times ``scale``, plus ``offset``. Triangles
+    of no area are left out (they are no contact geometry)."""
+    _check_keys(w, MESH_KEYS, key)
+    material = _material_name(library, _require(w, "material", key, "a material name"),
+                              f"{key}.material")
+    name = _string(_require(w, "file", key, "a triangle mesh, e.g. an STL file"), f"{key}.file")
+    path = Path(name)
+    if not path.is_absolute() and source != "<string>":
+        path = Path(source).parent / path
+    faces = _string(w.get("faces", "both"), f"{key}.faces")
+    if faces not in FACE_SIDES:
+        raise InputError(f"unknown side '{faces}'{did_you_mean(faces, FACE_SIDES)}; known: "
+                         f"{', '.join(FACE_SIDES)}", f"{key}.faces")
+    scale = check_positive(w.get("scale", 1.0), f"{key}.scale", "m per file unit")
+    offset = _vector(w["offset"], f"{key}.offset") if "offset" in w else np.zeros(3)
+    try:
+        triangles = shapes.read_mesh(path)
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot read the mesh {path}: {exc}", f"{key}.file") from None
+    if len(triangles) > MAX_TRIANGLES:
+        raise InputError(f"{len(triangles)} triangles, more than {MAX_TRIANGLES}",
+                         f"{key}.file")
+    return dict(kind="mesh", key=key, triangles=triangles * scale + offset,
+                both=faces == "both", material=material)
+
+
+def _corner_count(table: dict, key: str) -> int:
+    """``corners`` of a circle's regular polygon (shapes.DEFAULT_SIDES unless given)."""
+    value = table.get("corners", shapes.DEFAULT_SIDES)
+    if (isinstance(value, bool) or not isinstance(value, int)
+            or not shapes.MIN_SIDES <= value <= MAX_CORNERS):
+        raise InputError(f"must be a whole number from {shapes.MIN_SIDES} to {MAX_CORNERS}, "
+                         f"got {short_repr(value)}", f"{key}.corners")
+    return value
+
+
+def _parse_hole(tab, key: str, point: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """A plane's ``hole`` table → the corners [m] of the hole, a convex polygon in the plane."""
+    tab = _table(tab, key, "a table: { shape = \"circle\", center, radius } or "
+                           "{ shape = \"rectangle\", center, size }")
+    shape = _string(_require(tab, "shape", key, "'circle' or 'rectangle'"), f"{key}.shape")
+    if shape not in HOLE_KEYS:
+        raise InputError(f"unknown shape '{shape}'{did_you_mean(shape, tuple(HOLE_KEYS))}; "
+                         f"known: {', '.join(HOLE_KEYS)}", f"{key}.shape")
+    _check_keys(tab, HOLE_KEYS[shape], key)
+    center = _vector(_require(tab, "center", key, "[x, y, z] in m, in the plane"),
+                     f"{key}.center")
+    center = center - float(np.dot(center - point, normal)) * normal  # onto the plane
+    if shape == "circle":
+        radius = check_positive(_require(tab, "radius", key, "in m"), f"{key}.radius", "m")
+        return shapes.regular_polygon(center, normal, radius, _corner_count(tab, key))
+    size = _require(tab, "size", key, "[width, height] in m")
+    if not isinstance(size, list) or len(size) != 2:
+        raise InputError(f"must be [width, height] in m, got {short_repr(size)}",
+                         f"{key}.size")
+    size = [check_positive(v, f"{key}.size[{i}]", "m") for i, v in enumerate(size)]
+    first = None
+    if "axis" in tab:
+        first = _direction(tab, "axis", key, "along the first side")
+        if abs(float(np.dot(first, normal))) > 1.0 - PARALLEL_TOLERANCE:
+            raise InputError("must not be along the plane's normal", f"{key}.axis")
+    return shapes.rectangle(center, normal, size, first)
+
+
+def _periodic_images(parts: tuple, walls: _Walls, periodic: tuple, r_max: float) -> tuple:
+    """The parts with an image of every fixed sphere (or corner) within a sphere's reach of an
+    end of a periodic axis, across it, so spheres on either side meet it; a face or an edge
+    must keep clear of the ends by that reach (a sphere moving on it would change images)."""
+    out = list(parts)
+    lower, upper = walls.box_lower, walls.box_upper
+    for k in range(3):
+        if not periodic[k]:
+            continue
+        length = upper[k] - lower[k]
+        for q in list(out):
+            box = q.bounds()
+            if q.kind != WK_BALL:
+                corners = q.corners if box is None else np.array(box)
+                if box is None and abs(q.normal[k]) > PARALLEL_TOLERANCE:
+                    raise InputError(f"a plane with a hole must be parallel to the periodic "
+                                     f"axis {AXES[k]}", f"{q.key}.normal")
+                if len(corners) and (corners[:, k].min() - r_max < lower[k]
+                                     or corners[:, k].max() + r_max > upper[k]):
+                    raise InputError(
+                        f"a finite wall must keep one sphere radius ({_fmt(r_max)} m) clear of "
+                        f"the ends of the periodic axis {AXES[k]} (only fixed spheres may "
+                        "reach across them)", q.key)
+                continue
+            for sign in (1.0, -1.0):
+                if (box[0][k] - r_max < lower[k]) if sign > 0 else (box[1][k] + r_max
+                                                                    > upper[k]):
+                    shift = np.zeros(3)
+                    shift[k] = sign * length
+                    out.append(shapes.ball(q.point + shift, q.geo[BL_RADIUS], q.material,
+                                           q.key))
+    return tuple(out)
+
+
+def _make_parts(walls: _Walls, material_names: list[str], fixed: list[dict]) -> tuple:
+    """The parts of the finite walls and the fixed spheres (hsgran.shapes.Part), in file
+    order, then the fixed [[particles]]."""
+    parts = []
+    for w in walls.entries:
+        if w["kind"] not in ("polygon", "mesh", "sphere", "plane"):
+            continue
+        material = material_names.index(w["material"])
+        if w["kind"] == "polygon":
+            parts += shapes.polygon(w["corners"], material, w["key"], w["both"])
+        elif w["kind"] == "mesh":
+            for triangle in w["triangles"]:
+                parts += shapes.polygon(triangle, material, w["key"], w["both"])
+        elif w["kind"] == "sphere":
+            parts.append(shapes.ball(w["center"], w["radius"], material, w["key"]))
+        elif w["kind"] == "plane" and w.get("hole") is not None:
+            parts += shapes.plane_with_hole(w["point"], w["normal"], w["hole"], material,
+                                            w["key"])
+    for p in fixed:
+        parts.append(shapes.ball(p["position"], p["radius"], material_names.index(p["material"]),
+                                 p["key"]))
+    return tuple(shapes.weld(parts))
 
 
 def _parse_cylinder(w: dict, key: str, library: MaterialLibrary, periodic: tuple) -> dict:
@@ -1121,7 +1334,11 @@ def _make_planes(walls: _Walls, periodic: tuple, material_names: list[str]) -> l
     """Every plane wall, and the box's faces on its non-periodic axes, in file order."""
     planes = []
     for w in walls.entries:
+        if w["kind"] in ("polygon", "sphere", "mesh"):
+            continue  # (parts: _make_parts)
         if w["kind"] == "plane":
+            if w.get("hole") is not None:
+                continue  # a face with a hole (_make_parts)
             planes.append(_frozen_plane(w["point"], w["normal"],
                                         material_names.index(w["material"]), w["key"],
                                         w["motion"]))
@@ -1155,7 +1372,8 @@ def _frozen_plane(point: np.ndarray, normal: np.ndarray, material: int, key: str
     return Plane(point, normal, material, key, motion)
 
 
-def _space(planes: list[Plane], cylinders: tuple, walls: _Walls, periodic: tuple) -> Space:
+def _space(planes: list[Plane], cylinders: tuple, parts: tuple, walls: _Walls,
+           periodic: tuple) -> Space:
     """Where spheres may lie, for placement and the overlap checks."""
     if walls.box_key is None:
         origin, period = np.zeros(3), np.zeros(3)
@@ -1167,7 +1385,8 @@ def _space(planes: list[Plane], cylinders: tuple, walls: _Walls, periodic: tuple
                  origin=origin, period=period,
                  cyl_center=np.array([c.center for c in cylinders], dtype=float).reshape(-1, 3),
                  cyl_row=np.array([c.row() for c in cylinders],
-                                  dtype=float).reshape(-1, CY_SIZE))
+                                  dtype=float).reshape(-1, CY_SIZE),
+                 parts=shapes.tables(parts))
 
 
 # -- [[particles]] --
@@ -1177,7 +1396,15 @@ def _parse_particles(doc: dict, library: MaterialLibrary, effects: Effects) -> l
     for k, p in enumerate(_array_of_tables(doc, "particles")):
         key = f"particles[{k}]"
         _check_keys(p, PARTICLE_KEYS, key)
-        material = _particle_material(
+        fixed = p.get("fixed", False)
+        if not isinstance(fixed, bool):
+            raise InputError(f"must be true or false, got {short_repr(fixed)}", f"{key}.fixed")
+        if fixed:  # a fixed sphere: a wall (any material), never moving
+            for name in ("velocity", "angular_velocity"):
+                if name in p:
+                    raise InputError("a fixed sphere does not move; remove it",
+                                     f"{key}.{name}")
+        material = (_material_name if fixed else _particle_material)(
             library, _require(p, "material", key, "a material name"), f"{key}.material")
         radius = check_positive(_require(p, "radius", key, "in m"), f"{key}.radius", "m")
         position = _vector(_require(p, "position", key, "[x, y, z] in m"),
@@ -1189,7 +1416,7 @@ def _parse_particles(doc: dict, library: MaterialLibrary, effects: Effects) -> l
         _check_magnitude(omega * radius, MAX_SPEED, "m/s (surface speed |ω| R)",
                          f"{key}.angular_velocity")
         out.append(dict(key=key, material=material, radius=radius, position=position,
-                        velocity=velocity, angular_velocity=omega))
+                        velocity=velocity, angular_velocity=omega, fixed=fixed))
     return out
 
 
@@ -1268,13 +1495,22 @@ def _region(table: dict, key: str, r_max: float, walls: _Walls) -> tuple[np.ndar
 
 
 def _parse_fills(doc: dict, library: MaterialLibrary, effects: Effects,
-                 walls: _Walls) -> list[Fill]:
+                 walls: _Walls, fixed_keys: set) -> list[Fill]:
+    """The [[fill]] blocks; the keys of those of fixed spheres are added to ``fixed_keys``."""
     fills = []
     for k, f in enumerate(_array_of_tables(doc, "fill")):
         key = f"fill[{k}]"
         _check_keys(f, FILL_KEYS, key)
         count = _count(_require(f, "count", key, "number of spheres"), f"{key}.count")
-        material = _particle_material(
+        fixed = f.get("fixed", False)
+        if not isinstance(fixed, bool):
+            raise InputError(f"must be true or false, got {short_repr(fixed)}", f"{key}.fixed")
+        if fixed:
+            fixed_keys.add(key)
+            for name in ("speed", "angular_velocity"):
+                if name in f:
+                    raise InputError("fixed spheres do not move; remove it", f"{key}.{name}")
+        material = (_material_name if fixed else _particle_material)(
             library, _require(f, "material", key, "a material name"), f"{key}.material")
         r_min, r_max = _radius_range(f, key)
         lower, upper = _region(f, key, r_max, walls)
@@ -1287,6 +1523,22 @@ def _parse_fills(doc: dict, library: MaterialLibrary, effects: Effects,
                          f"{key}.angular_velocity")
         fills.append(Fill(key, count, material, (r_min, r_max), lower, upper, speed, omega))
     return fills
+
+
+def _place_fixed(seed: int, fills: list[Fill], explicit: _Spheres, space: Space, parts: tuple,
+                 material_names: list[str]) -> tuple:
+    """The parts with the fixed spheres of ``fills`` (a rough base, obstacles) as balls,
+    placed clear of the walls, the explicit spheres and each other with their own stream of
+    the scene's seed (FIXED_FILL_STREAM), before the other fills."""
+    rng = np.random.default_rng([seed, FIXED_FILL_STREAM])
+    position, radius = explicit.position, explicit.radius
+    balls = []
+    for f in fills:
+        p, _, r = fill_spheres(rng, f, position, radius, space)
+        position, radius = np.concatenate([position, p]), np.concatenate([radius, r])
+        balls += [shapes.ball(c, float(rc), material_names.index(f.material), f.key)
+                  for c, rc in zip(p, r, strict=True)]
+    return tuple(parts) + tuple(balls)
 
 
 def _place_fills(seed: int, fills: list[Fill], explicit: _Spheres, space: Space,

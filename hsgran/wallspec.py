@@ -2,8 +2,9 @@
 (layer 1; no numba: files and drawings read them too). :mod:`hsgran.wallmotion` compiles these
 functions for the event loop and adds the contact time with a moving plane (docs/walls.md).
 
-The engine keeps one row per wall (``Walls.planes_*``): the planes first, then the cylinders;
-``Walls.planes_kind`` says which (``WK_*``).
+The engine keeps one row per wall (``Walls.planes_*``): the planes first, then the cylinders,
+then the parts of the finite walls (faces, their edges and corners) and the fixed spheres;
+``Walls.planes_kind`` says which (``WK_*``; docs/walls.md, "Finite walls").
 
 A moving plane keeps its normal and translates along a unit direction d: p(t) = p₀ + d s(t),
 s(0) = 0. Each plane's motion is one row of ``M_*`` values (``Walls.planes_mot``); a fixed
@@ -26,7 +27,30 @@ CY_RADIUS = 3  #: radius R [m]
 CY_SIDE = 4  #: +1: the spheres are inside; −1: outside
 CY_OMEGA = 5  #: angular velocity Ω about a [rad/s] (right-handed)
 CY_HALF = 6  #: half its length [m] (for drawings; its ends are closed by planes)
-CY_SIZE = 7
+#: 1 for the edge of a finite wall: a cylinder of radius 0 whose contacts count only between
+#: its ends (|s| ≤ CY_HALF along the axis from its middle); 0 for a cylinder wall
+CY_FINITE = 7
+CY_SIZE = 8
+
+#: a face of a finite wall: a one-sided plane (``planes_p``, ``planes_n``) whose contacts
+#: count only where the centre's foot lies on the face (``planes_geo``: the ``FC_*`` columns)
+WK_FACE = 3
+#: a fixed sphere, or the corner of a finite wall (radius 0): centre ``planes_p``, radius
+#: ``planes_geo[w, BL_RADIUS]``; its row's ``planes_n`` is the normal at its last contact
+WK_BALL = 4
+
+FC_E1 = 0  #: unit in-plane axis e₁ of the face's coordinates (u, v), columns 0–2
+FC_E2 = 3  #: unit in-plane axis e₂ = n × e₁, columns 3–5
+#: first row and number of rows in ``face_lines`` of the half-planes a u + b v ≤ c whose
+#: intersection is the face's outline (none: the face is unbounded, a plane with a hole)
+FC_LINES = 6
+FC_NLINES = 7
+#: first row and number of rows of the hole, the region where a u + b v < c for all of them
+#: (none: no hole)
+FC_HOLE = 8
+FC_NHOLE = 9
+BL_RADIUS = 0  #: a fixed sphere's radius [m] (0 for a corner)
+GEO_SIZE = 10
 
 MOT_FIXED = 0  #: the plane does not move
 MOT_OSCILLATION = 1  #: s(t) = A [sin(ω t + φ) − sin φ]

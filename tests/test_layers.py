@@ -33,6 +33,8 @@ LAYERS = {
     "wallspec": 1,
     "onplane": 2,
     "outlets": 2,
+    "facets": 2,
+    "shapes": 1,
     "_exchange": 5,
     "events.": 3,
     "events.kinds": 3,

@@ -152,3 +152,43 @@ def insert_all(cell, head, nxt, prv, ncell):
     """
     for i in range(cell.shape[0]):
         insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), head, nxt, prv)
+
+
+def part_lists(lower: np.ndarray, upper: np.ndarray, origin, size, ncell, periodic):
+    """The cell lists of the parts of finite walls (hsgran.shapes): part q is listed in every
+    list whose cells meet its box [lower[q], upper[q]] (the part's extent grown by the largest
+    sphere radius: every centre within a radius of the part lies in it), so a sphere looks
+    only at the parts listed in its own cell's list, up to its cell exit.
+
+    Args:
+        lower, upper: Boxes [m], (Q, 3).
+        origin, size, ncell, periodic: The grid (:func:`plan_grid`); along a periodic axis a
+            box is cut to the period (parts near its ends have images of their own), along the
+            others the cells are hashed, as the spheres'.
+
+    Returns:
+        (start (cells + 1,), items (M,)): list s holds items[start[s]:start[s + 1]], indices
+        into the Q parts in increasing order.
+    """
+    ncell = np.asarray(ncell, dtype=np.int64)
+    slots, owners = [], []
+    for q in range(len(lower)):
+        axes = []
+        for k in range(3):
+            lo = int(np.floor((lower[q, k] - origin[k]) / size[k]))
+            hi = int(np.floor((upper[q, k] - origin[k]) / size[k]))
+            if periodic[k]:
+                lo, hi = max(lo, 0), min(hi, ncell[k] - 1)
+            span = np.arange(lo, hi + 1) if hi - lo + 1 < ncell[k] else np.arange(ncell[k])
+            axes.append(np.unique(np.mod(span, ncell[k])))
+        x, y, z = np.meshgrid(*axes, indexing="ij")
+        s = ((x * ncell[1] + y) * ncell[2] + z).ravel()
+        slots.append(s)
+        owners.append(np.full(s.shape, q, dtype=np.int64))
+    cells = int(np.prod(ncell))
+    slots = np.concatenate(slots) if slots else np.zeros(0, dtype=np.int64)
+    owners = np.concatenate(owners) if owners else np.zeros(0, dtype=np.int64)
+    order = np.lexsort((owners, slots))
+    start = np.zeros(cells + 1, dtype=np.int64)
+    np.add.at(start, slots + 1, 1)
+    return np.cumsum(start), owners[order]

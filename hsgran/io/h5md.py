@@ -46,14 +46,33 @@ from __future__ import annotations
 import json
 import os
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import h5py
 import numpy as np
 
 from hsgran.errors import InputError
+from hsgran.shapes import Part, tables
 from hsgran.system import available_memory
-from hsgran.wallspec import CY_RADIUS, CY_SIZE, M_DIR, M_KIND, M_SIZE, MOT_FIXED, wall_shift
+from hsgran.wallspec import (
+    CY_FINITE,
+    CY_RADIUS,
+    CY_SIZE,
+    FC_HOLE,
+    FC_LINES,
+    FC_NHOLE,
+    GEO_SIZE,
+    M_DIR,
+    M_KIND,
+    M_SIZE,
+    MOT_FIXED,
+    WK_BALL,
+    WK_CYLINDER,
+    WK_FACE,
+    WK_MOVING,
+    WK_PLANE,
+    wall_shift,
+)
 
 #: H5MD specification version the files conform to (``/h5md@version``).
 H5MD_VERSION = (1, 1)
@@ -219,7 +238,8 @@ _UTF8 = h5py.string_dtype("utf-8")
 @dataclass
 class Walls:
     """The walls a run simulated, one row each: the planes (box faces and cylinder caps
-    included), then the cylinders.
+    included), then the cylinders, then the parts of finite walls and the fixed spheres
+    (faces, edges, corners, balls: docs/walls.md, "Finite walls").
 
     Attributes:
         point: A point of each plane, the middle of each cylinder's axis [m], shape (W, 3).
@@ -230,7 +250,14 @@ class Walls:
         motion: Each plane's prescribed motion, shape (W, 8): the ``M_*`` columns of
             :mod:`hsgran.wallspec` (kind 0 for a fixed plane; ``point`` is the plane at t = 0).
         cylinder: Each cylinder's geometry, shape (W, CY_SIZE): the ``CY_*`` columns of
-            :mod:`hsgran.wallspec` (radius 0 for a plane), or ``None`` without cylinders.
+            :mod:`hsgran.wallspec` (radius 0 for a plane; an edge of a finite wall has radius
+            0 and ``CY_FINITE`` 1), or ``None`` without cylinders or edges (files before the
+            edges have 7 columns, read with ``CY_FINITE`` 0).
+        kind: Each wall's ``WK_*`` code of :mod:`hsgran.wallspec`, shape (W,), or ``None``
+            without finite walls.
+        geometry: Each face's ``FC_*`` and each ball's ``BL_RADIUS`` values, shape
+            (W, GEO_SIZE); a face's ``FC_LINES`` and ``FC_HOLE`` are rows of ``lines``.
+        lines: The faces' outlines and holes, rows (a, b, c) of a u + b v ≤ c, shape (L, 3).
     """
 
     point: np.ndarray
@@ -239,10 +266,37 @@ class Walls:
     key: list[str]
     motion: np.ndarray | None = None
     cylinder: np.ndarray | None = None
+    kind: np.ndarray | None = None
+    geometry: np.ndarray | None = None
+    lines: np.ndarray | None = None
 
     def is_cylinder(self, k: int) -> bool:
-        """Whether wall k is a cylinder."""
+        """Whether wall k is a cylinder wall (not an edge of a finite wall)."""
         return self.cylinder is not None and self.cylinder[k, CY_RADIUS] > 0.0
+
+    def is_part(self, k: int) -> bool:
+        """Whether wall k is a face, an edge or a corner of a finite wall, or a fixed
+        sphere."""
+        return self.kind is not None and (
+            int(self.kind[k]) in (WK_FACE, WK_BALL)
+            or (self.cylinder is not None and self.cylinder[k, CY_FINITE] != 0.0))
+
+    def part(self, k: int):
+        """Wall k as a :class:`hsgran.shapes.Part` (if :meth:`is_part`)."""
+        geo = self.geometry[k].copy()
+        lines = np.zeros((0, 3))
+        if int(self.kind[k]) == WK_FACE:
+            start = int(geo[FC_LINES])
+            stop = int(geo[FC_HOLE]) + int(geo[FC_NHOLE])
+            lines = self.lines[start:stop]
+            geo[FC_LINES] -= start
+            geo[FC_HOLE] -= start
+        part = Part(int(self.kind[k]), self.point[k], self.normal[k], geo,
+                    self.cylinder[k] if self.cylinder is not None else np.zeros(CY_SIZE), lines,
+                    int(self.material[k]), self.key[k], np.zeros((0, 3)))
+        if part.kind == WK_FACE:
+            return replace(part, corners=part.outline())
+        return part
 
     def shift(self, k: int, t: float) -> np.ndarray:
         """How far plane k has moved at time t [s] [m], shape (3,)."""
@@ -256,22 +310,30 @@ class Walls:
         ``normal``, ``motion``, ``material`` and ``key`` attributes, and cylinders with
         ``center`` and ``row()`` in their place (:class:`hsgran.scene.Cylinder`)."""
         walls = list(walls)
-        point, normal, motion, cylinder = [], [], [], []
-        has_cyl = False
+        point, normal, motion, cylinder, kind = [], [], [], [], []
+        parts = [w for w in walls if isinstance(w, Part)]  # (the last rows)
         for w in walls:
             is_cyl = hasattr(w, "row")
-            has_cyl |= is_cyl
+            is_part = isinstance(w, Part)
             point.append(w.center if is_cyl else w.point)
             normal.append(np.zeros(3) if is_cyl else w.normal)
             motion.append(np.zeros(M_SIZE) if is_cyl or w.motion is None else w.motion)
-            cylinder.append(w.row() if is_cyl else np.zeros(CY_SIZE))
+            cylinder.append(w.row() if is_cyl else w.cyl if is_part else np.zeros(CY_SIZE))
+            kind.append(w.kind if is_part else WK_CYLINDER if is_cyl else
+                        WK_PLANE if w.motion is None else WK_MOVING)
+        has_cyl = WK_CYLINDER in kind
+        t = tables(parts) if parts else None
         return cls(point=np.array(point, dtype=np.float64).reshape(-1, 3),
                    normal=np.array(normal, dtype=np.float64).reshape(-1, 3),
                    material=np.array([w.material for w in walls], dtype=np.int32),
                    key=[str(w.key) for w in walls],
                    motion=np.array(motion, dtype=np.float64).reshape(-1, M_SIZE),
                    cylinder=(np.array(cylinder, dtype=np.float64).reshape(-1, CY_SIZE)
-                             if has_cyl else None))
+                             if has_cyl else None),
+                   kind=np.array(kind, dtype=np.int8) if parts else None,
+                   geometry=(np.concatenate([np.zeros((len(walls) - len(parts), GEO_SIZE)),
+                                             t.geo]) if parts else None),
+                   lines=t.lines if parts else None)
 
     def __len__(self) -> int:
         return int(self.point.shape[0])
@@ -643,6 +705,10 @@ class TrajectoryWriter:
                 group.create_dataset("motion", data=walls.motion)
             if walls.cylinder is not None:
                 group.create_dataset("cylinder", data=walls.cylinder)
+            if walls.kind is not None:
+                group.create_dataset("kind", data=walls.kind)
+                group.create_dataset("geometry", data=walls.geometry)
+                _set_unit(group.create_dataset("lines", data=walls.lines), UNIT_LENGTH)
         if pair_table is not None:
             parameters.create_dataset(PAIR_TABLE, data=pair_table)
 
@@ -1135,10 +1201,16 @@ def _read_walls(parameters: h5py.Group) -> Walls | None:
     if WALLS not in parameters:
         return None
     group = parameters[WALLS]
+    cylinder = group["cylinder"][()] if "cylinder" in group else None
+    if cylinder is not None and cylinder.shape[1] < CY_SIZE:  # (written before the edges)
+        cylinder = np.pad(cylinder, ((0, 0), (0, CY_SIZE - cylinder.shape[1])))
     return Walls(point=group["point"][()], normal=group["normal"][()],
                  material=group["material"][()], key=[_text(k) for k in group["key"][()]],
                  motion=group["motion"][()] if "motion" in group else None,
-                 cylinder=group["cylinder"][()] if "cylinder" in group else None)
+                 cylinder=cylinder,
+                 kind=group["kind"][()] if "kind" in group else None,
+                 geometry=group["geometry"][()] if "geometry" in group else None,
+                 lines=group["lines"][()] if "lines" in group else None)
 
 
 def _read_pair_table(parameters: h5py.Group) -> np.ndarray | None:
@@ -1250,7 +1322,13 @@ def _checked_walls(walls: Walls, n_materials: int) -> Walls:
               else _checked(walls.motion, "walls.motion", (p, M_SIZE), np.float64))
     cylinder = (None if walls.cylinder is None
                 else _checked(walls.cylinder, "walls.cylinder", (p, CY_SIZE), np.float64))
-    return Walls(point, normal, material, [str(k) for k in walls.key], motion, cylinder)
+    kind = geometry = lines = None
+    if walls.kind is not None:
+        kind = _checked(walls.kind, "walls.kind", (p,), np.int8)
+        geometry = _checked(walls.geometry, "walls.geometry", (p, GEO_SIZE), np.float64)
+        lines = _checked(walls.lines, "walls.lines", (len(walls.lines), 3), np.float64)
+    return Walls(point, normal, material, [str(k) for k in walls.key], motion, cylinder, kind,
+                 geometry, lines)
 
 
 def _seed_attribute(seed):
