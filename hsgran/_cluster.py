@@ -43,16 +43,14 @@ import numpy as np
 from hsgran._flight import (
     TOUCH_REL,
     advance,
-    ball,
     enter_plane,
     halt,
     leave_plane,
     min_image,
     state_at,
-    wall_gap,
 )
 from hsgran._jit import njit
-from hsgran._predict import cell_heads, near_wall, near_walls, reschedule_fn
+from hsgran._predict import cell_heads, reschedule_fn
 from hsgran._state import (
     F_CLUSTER_LOSS,
     F_LANDING_SPEED,
@@ -86,7 +84,6 @@ from hsgran.contact.model import (
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S
 from hsgran.motion import NEVER, plane_gap
 from hsgran.onplane import END_NONE, END_RESOLVE, MS_FLIGHT, MS_REST, MS_SUPPORTED
-from hsgran.wallspec import BL_RADIUS, WK_PLANE
 
 #: A segment of constant accelerations lasts until a contact between spheres has moved
 #: tangentially by this fraction of σ [-]: the contact normal then turns by 1e-4 rad and the
@@ -216,16 +213,12 @@ def gather(s1, s2, t, fast, flight, dyn, walls, space, grid, clus, rotation):
     while p < nb:
         s = clus.cl_body[p]
         rs = st[s, S_R]
-        n_near, first_part = near_walls(s, walls, grid)
-        for k in range(n_near):
-            w = near_wall(k, walls, grid, first_part)
-            # (a cylinder's or a fixed sphere's row then describes its contact with s)
-            gap = (plane_gap(st[s, 0], st[s, 1], st[s, 2], rs, planes_p, planes_n, w)
-                   if walls.planes_kind[w] == WK_PLANE else wall_gap(s, w, st, walls))
+        # (the scene refuses clusters with walls other than fixed planes: scene._check_moving)
+        for w in range(planes_p.shape[0]):
+            gap = plane_gap(st[s, 0], st[s, 1], st[s, 2], rs, planes_p, planes_n, w)
             if gap <= TOUCH_REL * rs and nc < max_c:
                 nc = _add_contact(clus, nc, p, -1, -1 - w, planes_mat[w], planes_n[w, 0],
-                                  planes_n[w, 1], planes_n[w, 2],
-                                  walls.planes_geo[w, BL_RADIUS] if ball(walls, w) else 0.0)
+                                  planes_n[w, 1], planes_n[w, 2], 0.0)
                 for k in range(3):
                     clus.ck_vb[nc - 1, k] = walls.planes_vel[w, k]
         for h in range(cell_heads(s, grid, space)):

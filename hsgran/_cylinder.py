@@ -31,10 +31,11 @@ import numpy as np
 
 from hsgran._jit import njit
 from hsgran._state import F_CHI, S_R, S_T
+from hsgran.facets import END_OFF
 from hsgran.materials import P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
-from hsgran.motion import NEVER
+from hsgran.motion import NEVER, face_exit_time
 from hsgran.onplane import END_NONE, END_SLIP, MS_REST, MS_ROLLING, plane_segment
-from hsgran.wallspec import CY_AXIS, CY_OMEGA, CY_RADIUS, CY_SIDE
+from hsgran.wallspec import CY_AXIS, CY_FINITE, CY_HALF, CY_OMEGA, CY_RADIUS, CY_SIDE
 
 #: A segment on a cylinder turns at most this angle about the axis [rad], and lasts at most
 #: this share of √(ρ/|g|). Its accelerations are those of its start, so it errs by
@@ -201,6 +202,9 @@ def enter_cylinder(i, w, t, snap, prev, flight, dyn, walls, gravity, pair_table,
     side = cyl[w, CY_SIDE]
     rho = cyl[w, CY_RADIUS] - side * r
     ax, ay, az = cyl[w, CY_AXIS], cyl[w, CY_AXIS + 1], cyl[w, CY_AXIS + 2]
+    finite = cyl[w, CY_FINITE] != 0.0  # an edge of a finite wall (hsgran.facets)
+    if finite and abs(_along(st, i, walls, w)) > cyl[w, CY_HALF]:
+        return False  # past its end: nothing holds the sphere
     d, u, e, n = _frame(st[i, 0], st[i, 1], st[i, 2], walls, w)
     for k in range(3):  # on the surface exactly
         st[i, k] += (rho - d) * u[k]
@@ -231,8 +235,25 @@ def enter_cylinder(i, w, t, snap, prev, flight, dyn, walls, gravity, pair_table,
                         gravity, pair_table, fsc, friction, rolling, rotation)
         if code < 0:
             return False
+    if finite:
+        # an edge's segment also ends where the sphere passes its end: it flies from there
+        acc = flight.acc
+        off, _ = face_exit_time(_along(st, i, walls, w), st[i, 3] * ax + st[i, 4] * ay
+                                + st[i, 5] * az, acc[i, 0] * ax + acc[i, 1] * ay
+                                + acc[i, 2] * az, -cyl[w, CY_HALF], cyl[w, CY_HALF])
+        if t + off < flight.seg_end[i]:
+            flight.seg_end[i] = t + off
+            flight.seg_code[i] = END_OFF
     mplane[i] = w
     return True
+
+
+@njit(inline="always")
+def _along(st, i, walls, w):
+    """Sphere i's coordinate [m] along cylinder w's axis from its middle."""
+    p, cyl = walls.planes_p, walls.planes_cyl
+    return ((st[i, 0] - p[w, 0]) * cyl[w, CY_AXIS] + (st[i, 1] - p[w, 1]) * cyl[w, CY_AXIS + 1]
+            + (st[i, 2] - p[w, 2]) * cyl[w, CY_AXIS + 2])
 
 
 @njit(inline="always")

@@ -31,7 +31,13 @@ from hsgran._riding import (
     takeoff_delay,
 )
 from hsgran._state import F_CHI, F_TC_TIME, S_R, S_T, S_V
-from hsgran.facets import END_OFF, face_coordinates, face_leave_time, on_face
+from hsgran.facets import (
+    END_OFF,
+    FACE_BEHIND_REL,
+    face_coordinates,
+    face_leave_time,
+    on_face,
+)
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, approach_noise, flight_position, plane_gap
 from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
@@ -386,7 +392,8 @@ def wall_gap(i, w, st, walls):
     gap = plane_gap(x, y, z, r, walls.planes_p, walls.planes_n, w)
     if face(walls, w):
         u, v = face_coordinates(x, y, z, walls.planes_p, walls.planes_geo, w)
-        if gap < -r or not on_face(u, v, walls.planes_geo, walls.face_lines, w):
+        if gap < -FACE_BEHIND_REL * r or not on_face(u, v, walls.planes_p, walls.planes_geo,
+                                                     walls.face_lines, w):
             return NEVER
     return gap
 

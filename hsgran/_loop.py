@@ -66,7 +66,14 @@ from hsgran._observe import (
     close_interval,
     observing,
 )
-from hsgran._predict import predict, predict_fn, prefetch_cells, repredict_later
+from hsgran._predict import (
+    near_wall,
+    near_walls,
+    predict,
+    predict_fn,
+    prefetch_cells,
+    repredict_later,
+)
 from hsgran._riding import END_TAKEOFF, leave_ride, moving_gap
 from hsgran._settling import (
     SETTLE_NONE,
@@ -202,7 +209,6 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
     grav_on = flags[FL_GRAVITY]
     no_end = np.int64(END_NONE)
     st = flight.st
-    planes_p = walls.planes_p
     if grav_on:
         # spheres that start on a wall (touching it, not moving away faster than the
         # landing speed, pressed on by gravity) start in an on-wall state (a moving plane is
@@ -210,7 +216,9 @@ def init(flight, dyn, walls, space, grid, sched, pair_table, fsc, isc, flags):
         for i in range(st.shape[0]):
             if absent(flight, i):
                 continue
-            for w in range(planes_p.shape[0]):
+            n_near, first_part = near_walls(i, walls, grid)
+            for k in range(n_near):
+                w = near_wall(k, walls, grid, first_part)
                 if ball(walls, w):
                     continue  # (no motion state on a fixed sphere)
                 gap = wall_gap(i, w, st, walls)

@@ -23,6 +23,7 @@ from hsgran.events.calendar import calendar_update, has_buckets
 from hsgran.events.grid import slot_of
 from hsgran.events.kinds import EV_CELL, EV_EXIT, EV_NONE, EV_PAIR, EV_STATE, EV_WALL
 from hsgran.facets import (
+    FACE_BEHIND_REL,
     ball_contact_time,
     edge_contact_time,
     face_coordinates,
@@ -296,14 +297,15 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
         wkind = walls.planes_kind[w]
         if wkind != WK_PLANE and wkind != WK_FACE:
             tau = other_wall_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], ri, walls, w,
-                                  t_now, best, supported, space.slack[0], seg_end[i] - t_now)
+                                  t_now, best, supported, space.slack[0],
+                                  seg_end[i] - t_now if supported else NEVER)
             if tau < best:
                 best = tau
                 kind = EV_WALL
                 partner = w
             continue
         gap = plane_gap(xi, yi, zi, ri, planes_p, planes_n, w)
-        if wkind == WK_FACE and gap < -ri:
+        if wkind == WK_FACE and gap < -FACE_BEHIND_REL * ri:
             continue  # behind a face (hsgran.facets)
         if gap <= PLANE_TOUCHING_REL * ri:
             # touching within rounding: a contact now if approaching or pressed (a gap of
@@ -322,7 +324,7 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
                                       yi + tau * (vi + 0.5 * gi[1] * tau),
                                       zi + tau * (wi + 0.5 * gi[2] * tau), planes_p,
                                       walls.planes_geo, w)
-            if not on_face(fu, fv, walls.planes_geo, walls.face_lines, w):
+            if not on_face(fu, fv, planes_p, walls.planes_geo, walls.face_lines, w):
                 tau = NEVER
             elif tau == 0.0 and face_leave_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2],
                                                 planes_p, walls.planes_geo, walls.face_lines,

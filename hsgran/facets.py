@@ -42,6 +42,13 @@ from hsgran.wallspec import FC_E1, FC_E2, FC_HOLE, FC_LINES, FC_NHOLE, FC_NLINES
 #: the edge it passed over at once if gravity presses it on (docs/walls.md, "Finite walls").
 END_OFF = 8
 
+#: A face is met only by a sphere whose centre lies in front of it by more than this share
+#: of its radius less one radius (a gap above −FACE_BEHIND_REL r) [-]: a sphere that touches
+#: a face overlaps it by rounding only; one whose centre came through a one-sided face from
+#: behind (the other side of a plane with a hole, of a "front" polygon) is not held or hit
+#: by it until its centre is half a radius in front.
+FACE_BEHIND_REL = 0.5
+
 #: A foot within this share of the size of the terms of a side's equation a u + b v − c (the
 #: rounding of a position projected on the face, ~1e-16 of them) counts as on the side [-]:
 #: a sphere whose foot left its face where the face meets another in the same plane is then
@@ -52,9 +59,16 @@ OUTLINE_ROUND_REL = 1e-12
 
 
 @njit(inline="always")
-def _side(a, b, c, u, v):
-    """a u + b v − c, and its rounding scale (OUTLINE_ROUND_REL of its terms)."""
-    return a * u + b * v - c, OUTLINE_ROUND_REL * (abs(a * u) + abs(b * v) + abs(c))
+def _side(a, b, c, u, v, far):
+    """a u + b v − c, and its rounding scale: OUTLINE_ROUND_REL of its terms and of ``far``
+    (|p|₁ of the face's origin p [m]: (u, v) come from x − p, rounded to ~1e-16 of |x|)."""
+    return a * u + b * v - c, OUTLINE_ROUND_REL * (abs(a * u) + abs(b * v) + abs(c) + far)
+
+
+@njit(inline="always")
+def _far(p, w):
+    """|p|₁ of face w's origin [m] (the scale of the rounding of its coordinates)."""
+    return abs(p[w, 0]) + abs(p[w, 1]) + abs(p[w, 2])
 
 
 @njit(inline="always")
@@ -66,12 +80,13 @@ def face_coordinates(x, y, z, p, geo, w):
 
 
 @njit(inline="always")
-def on_face(u, v, geo, lines, w):
-    """Whether the in-plane point (u, v) [m] lies on face w: inside its outline and not inside
-    its hole, the sides included (to their rounding, OUTLINE_ROUND_REL)."""
+def on_face(u, v, p, geo, lines, w):
+    """Whether the in-plane point (u, v) [m] lies on face w (origins ``p``): inside its outline
+    and not inside its hole, the sides included (to their rounding, OUTLINE_ROUND_REL)."""
+    far = _far(p, w)
     start = int(geo[w, FC_LINES])
     for k in range(start, start + int(geo[w, FC_NLINES])):
-        g, eps = _side(lines[k, 0], lines[k, 1], lines[k, 2], u, v)
+        g, eps = _side(lines[k, 0], lines[k, 1], lines[k, 2], u, v, far)
         if g > eps:
             return False
     n_hole = int(geo[w, FC_NHOLE])
@@ -79,7 +94,7 @@ def on_face(u, v, geo, lines, w):
         return True
     start = int(geo[w, FC_HOLE])
     for k in range(start, start + n_hole):
-        g, eps = _side(lines[k, 0], lines[k, 1], lines[k, 2], u, v)
+        g, eps = _side(lines[k, 0], lines[k, 1], lines[k, 2], u, v, far)
         if g >= -eps:
             return True
     return False
@@ -113,10 +128,11 @@ def face_leave_time(x, y, z, vx, vy, vz, ax, ay, az, p, geo, lines, w):
     u2 = ax * geo[w, FC_E1] + ay * geo[w, FC_E1 + 1] + az * geo[w, FC_E1 + 2]
     v2 = ax * geo[w, FC_E2] + ay * geo[w, FC_E2 + 1] + az * geo[w, FC_E2 + 2]
     best = NEVER
+    far = _far(p, w)
     start = int(geo[w, FC_LINES])
     for k in range(start, start + int(geo[w, FC_NLINES])):
         a, b, c = lines[k, 0], lines[k, 1], lines[k, 2]
-        g, eps = _side(a, b, c, u0, v0)
+        g, eps = _side(a, b, c, u0, v0, far)
         tau = upward_root(g if g < -eps else 0.0, a * u1 + b * v1, a * u2 + b * v2)
         best = min(best, tau)
     start = int(geo[w, FC_HOLE])
@@ -124,7 +140,7 @@ def face_leave_time(x, y, z, vx, vy, vz, ax, ay, az, p, geo, lines, w):
     for k in range(start, stop):
         a, b, c = lines[k, 0], lines[k, 1], lines[k, 2]
         # into the hole across line k: a u + b v − c falls through zero, there inside the rest
-        g, eps = _side(a, b, c, u0, v0)
+        g, eps = _side(a, b, c, u0, v0, far)
         tau = _down_crossing(g if abs(g) > eps else 0.0, a * u1 + b * v1, a * u2 + b * v2)
         if tau >= best:
             continue
@@ -132,7 +148,7 @@ def face_leave_time(x, y, z, vx, vy, vz, ax, ay, az, p, geo, lines, w):
         v = v0 + tau * (v1 + 0.5 * v2 * tau)
         inside = True
         for q in range(start, stop):
-            gq, eq = _side(lines[q, 0], lines[q, 1], lines[q, 2], u, v)
+            gq, eq = _side(lines[q, 0], lines[q, 1], lines[q, 2], u, v, far)
             if q != k and gq > eq:
                 inside = False
                 break
@@ -167,8 +183,9 @@ def edge_contact_time(qx, qy, qz, ux, uy, uz, gx, gy, gz, s0, s1, s2, r, half, h
     c0 = qx * qx + qy * qy + qz * qz - r * r
     bound = 2.0 * max(abs(c3) / c4, (abs(c2) / c4) ** 0.5, (abs(c1) / c4) ** (1.0 / 3.0),
                       (0.5 * abs(c0) / c4) ** 0.25)
+    # (met at τ = 0, touching: the next crossing lies beyond the piece it starts)
     again = _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, r * r, 1.0, c4, c3, c2, c1,
-                        min(horizon, bound), False, tau)
+                        min(horizon, bound), tau == 0.0, tau)
     if again < NEVER and abs(s0 + again * (s1 + 0.5 * s2 * again)) <= half:
         return again
     return NEVER

@@ -384,7 +384,7 @@ def _clear_of_parts(x, r, kind, point, normal, geo, cyl, lines):
             height = d0 * normal[q, 0] + d1 * normal[q, 1] + d2 * normal[q, 2]
             if abs(height) < r:
                 u, v = face_coordinates(x[0], x[1], x[2], point, geo, q)
-                if on_face(u, v, geo, lines, q):
+                if on_face(u, v, point, geo, lines, q):
                     return False
         else:  # an edge
             s = min(max(d0 * cyl[q, CY_AXIS] + d1 * cyl[q, CY_AXIS + 1]

@@ -474,10 +474,10 @@ def run_reference(scene, max_collisions: int | None = None,
             events without its clock advancing.
     """
     driven = [w.key for w in scene.walls if getattr(w, "motion", None) is not None
-              or not hasattr(w, "normal")]
+              or not hasattr(w, "normal") or hasattr(w, "kind")]
     if driven:
         raise ValueError(f"the reference loop has fixed planes only ({driven[0]} is a moving "
-                         "plane or a cylinder)")
+                         "plane, a cylinder, a finite wall or a fixed sphere)")
     if getattr(scene, "outlets", ()):
         raise ValueError("the reference loop has a closed system only (the scene has outlets)")
     t_stop = scene.duration if until is None else float(until)

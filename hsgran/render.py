@@ -549,8 +549,9 @@ class Renderer:
         shade = WALL_AMBIENT + (1.0 - WALL_AMBIENT) * np.abs(mesh.cell_data["normal"] @ light)
         grey = np.asarray(CHECKER_COLORS[0], dtype=float)
         mesh.cell_data["rgb"] = np.clip(np.outer(shade, grey), 0, 255).astype(np.uint8)
-        self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, lighting=False,
-                              show_scalar_bar=False)
+        actor = self.plotter.add_mesh(mesh, scalars="rgb", rgb=True, lighting=False,
+                                      show_scalar_bar=False)
+        actor.prop.backface_culling = True  # each face of a plate from its own side only
 
     def _add_cylinders(self, cylinders: list[Cylinder]) -> None:
         """Each cylinder as a tube with stripes along its axis (they show it turn), seen from

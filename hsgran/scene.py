@@ -72,7 +72,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -196,8 +196,9 @@ DISK_KEYS = ("kind", "center", "normal", "radius", "material", "faces", "corners
 SPHERE_KEYS = ("kind", "center", "radius", "material")
 MESH_KEYS = ("kind", "file", "material", "faces", "scale", "offset")
 #: Most triangles a mesh wall may have: each is up to 7 engine wall rows (two faces, three
-#: edges, corners shared), and a contact search looks only at those listed near the sphere.
-MAX_TRIANGLES = 1_000_000
+#: edges, corners shared); a contact search looks only at those listed near the sphere, but
+#: the start (placement clear of every part, the first predictions) visits them all.
+MAX_TRIANGLES = 100_000
 #: Keys of a plane's hole: a circle (a regular polygon of its area) or a rectangle.
 HOLE_KEYS = {"circle": ("shape", "center", "radius", "corners"),
              "rectangle": ("shape", "center", "size", "axis")}
@@ -773,7 +774,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     planes = _make_planes(walls, head.periodic, material_names)
     cylinders = _make_cylinders(walls, material_names)
     parts = _make_parts(walls, material_names, fixed)
-    _check_moving(planes, cylinders, enduring.treatment)
+    _check_moving(planes, cylinders, parts, enduring.treatment)
     space = _space(planes, cylinders, parts, walls, head.periodic)
 
     # everything that does not need the fills' positions, before the (costly) placement
@@ -1081,13 +1082,20 @@ def _parse_mesh(w: dict, key: str, library: MaterialLibrary, source: str) -> dic
     offset = _vector(w["offset"], f"{key}.offset") if "offset" in w else np.zeros(3)
     try:
         triangles = shapes.read_mesh(path)
-    except (OSError, ValueError) as exc:
-        raise InputError(f"cannot read the mesh {path}: {exc}", f"{key}.file") from None
+    except Exception as exc:
+        raise InputError(f"cannot read the mesh {path}: {exc.__class__.__name__}: {exc}",
+                         f"{key}.file") from None
     if len(triangles) > MAX_TRIANGLES:
         raise InputError(f"{len(triangles)} triangles, more than {MAX_TRIANGLES}",
                          f"{key}.file")
-    return dict(kind="mesh", key=key, triangles=triangles * scale + offset,
-                both=faces == "both", material=material)
+    triangles = triangles * scale + offset
+    parts = []
+    for k, triangle in enumerate(triangles):
+        try:
+            parts += shapes.polygon(triangle, 0, key, faces == "both")
+        except ValueError as exc:
+            raise InputError(f"triangle {k}: {exc}", f"{key}.file") from None
+    return dict(kind="mesh", key=key, parts=parts, material=material)
 
 
 def _corner_count(table: dict, key: str) -> int:
@@ -1111,7 +1119,9 @@ def _parse_hole(tab, key: str, point: np.ndarray, normal: np.ndarray) -> np.ndar
     _check_keys(tab, HOLE_KEYS[shape], key)
     center = _vector(_require(tab, "center", key, "[x, y, z] in m, in the plane"),
                      f"{key}.center")
-    center = center - float(np.dot(center - point, normal)) * normal  # onto the plane
+    off = float(np.dot(center - point, normal))
+    if abs(off) > shapes.FLAT_REL * (_length(center) + _length(point) + 1.0):
+        raise InputError(f"must lie in the plane (it is {_fmt(off)} m off it)", f"{key}.center")
     if shape == "circle":
         radius = check_positive(_require(tab, "radius", key, "in m"), f"{key}.radius", "m")
         return shapes.regular_polygon(center, normal, radius, _corner_count(tab, key))
@@ -1173,8 +1183,7 @@ def _make_parts(walls: _Walls, material_names: list[str], fixed: list[dict]) -> 
         if w["kind"] == "polygon":
             parts += shapes.polygon(w["corners"], material, w["key"], w["both"])
         elif w["kind"] == "mesh":
-            for triangle in w["triangles"]:
-                parts += shapes.polygon(triangle, material, w["key"], w["both"])
+            parts += [replace(q, material=material) for q in w["parts"]]
         elif w["kind"] == "sphere":
             parts.append(shapes.ball(w["center"], w["radius"], material, w["key"]))
         elif w["kind"] == "plane" and w.get("hole") is not None:
@@ -1304,13 +1313,13 @@ def _box_motions(w: dict, key: str, periodic: tuple) -> dict:
     return motions
 
 
-def _check_moving(planes: list[Plane], cylinders: tuple, treatment: str) -> None:
+def _check_moving(planes: list[Plane], cylinders: tuple, parts: tuple, treatment: str) -> None:
     moving = ([p.key for p in planes if p.motion is not None]
-              + [c.key for c in cylinders])
+              + [c.key for c in cylinders] + [q.key for q in parts])
     if moving and treatment == "clusters":
-        raise InputError(f"moving walls and cylinders ({moving[0]}) are not supported with "
-                         "the cluster treatment yet; use \"pairwise\"",
-                         "enduring_contact.treatment")
+        raise InputError(f"moving walls, cylinders, finite walls and fixed spheres "
+                         f"({moving[0]}) are not supported with the cluster treatment yet; use "
+                         "\"pairwise\"", "enduring_contact.treatment")
 
 
 def _check_periodic_planes(walls: _Walls, periodic: tuple) -> None:

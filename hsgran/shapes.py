@@ -47,6 +47,11 @@ MIN_SIDES = 3
 #: repeated or aligned corners). Far above the rounding of coordinates written in a file
 #: (1e-16), far below any polygon a scene means.
 FLAT_REL = 1e-9
+#: Faces that share a side and whose normals differ by less than this [rad] lie in one
+#: surface (shapes.weld drops the edge between them). A mesh stored in single precision (STL)
+#: has normals off by ~1e-7–1e-6 rad on a flat surface; at a fold this small a sphere of
+#: radius r comes no closer than r (1 − cos(θ/2)) ≈ r θ²/8 = 1.3e-11 r to the dropped edge.
+WELD_ANGLE = 1e-5
 
 
 @dataclass(frozen=True, eq=False)
@@ -103,7 +108,8 @@ class Part:
         return self.corners.min(axis=0), self.corners.max(axis=0)
 
     def on_face(self, u, v) -> np.ndarray:
-        """Whether in-plane points (u, v) [m] lie on this face (hsgran.facets.on_face)."""
+        """Whether in-plane points (u, v) [m] lie on this face (as hsgran.facets.on_face,
+        without its allowance for the rounding of the loop's positions)."""
         u = np.asarray(u, dtype=float)
         v = np.asarray(v, dtype=float)
         inside = np.ones(np.broadcast(u, v).shape, dtype=bool)
@@ -197,7 +203,10 @@ def _lines(corners, origin, e1, e2, what: str) -> np.ndarray:
     side = np.roll(uv, -1, axis=0) - uv  # side k from corner k to corner k + 1
     after = np.roll(side, -1, axis=0)
     turn = side[:, 0] * after[:, 1] - side[:, 1] * after[:, 0]
-    if not np.all(turn > FLAT_REL * size * size):
+    # convex: it turns one way at every corner, and once round in all (a star turns one way
+    # at every corner too, but twice round or more)
+    total = float(np.sum(np.arctan2(turn, np.einsum("ij,ij->i", side, after))))
+    if not (np.all(turn > FLAT_REL * size * size) and abs(total - 2.0 * math.pi) < 1.0):
         raise ValueError(f"{what} must be convex, without repeated or aligned corners")
     out = np.column_stack([side[:, 1], -side[:, 0]])  # outward normals (a, b)
     out /= np.linalg.norm(out, axis=1)[:, None]
@@ -254,6 +263,8 @@ def polygon(corners, material: int, key: str, both_sides: bool = True) -> list[P
     too), its edges and its corners. Raises ValueError if the corners are not coplanar and
     convex."""
     c = np.asarray(corners, dtype=float)
+    if np.any(np.all(c == np.roll(c, -1, axis=0), axis=1)):
+        raise ValueError("the polygon has a corner written twice in a row")
     n = polygon_normal(c)
     origin = c.mean(axis=0)
     e1, e2 = in_plane_axes(n, c[1] - c[0])
@@ -272,6 +283,8 @@ def plane_with_hole(point, normal, hole_corners, material: int, key: str) -> lis
     corners. Raises ValueError if the hole's corners are not in the plane or not convex."""
     n = np.asarray(normal, dtype=float)
     c = np.asarray(hole_corners, dtype=float)
+    if np.any(np.all(c == np.roll(c, -1, axis=0), axis=1)):
+        raise ValueError("the hole has a corner written twice in a row")
     origin = c.mean(axis=0)
     if abs(float(np.dot(origin - np.asarray(point, float), n))) > FLAT_REL * float(
             np.max(np.linalg.norm(c - origin, axis=1))):
@@ -283,38 +296,54 @@ def plane_with_hole(point, normal, hole_corners, material: int, key: str) -> lis
 
 
 def weld(parts: list[Part]) -> list[Part]:
-    """The parts without the edges and corners that lie inside a flat surface, and without
-    repeats: an edge is dropped where the faces that share it (an outline side of each,
-    the same two corners) all lie in one plane, with two faces for each side it is met from
-    (tiles of a plane, the triangles of a flat mesh: no contact geometry there, and a sphere
-    rolls across as on the plane); a corner is dropped where every edge that ends at it was;
-    an edge or a corner that several walls share is kept once. Corners match when written
-    the same, bit for bit (as in a mesh)."""
+    """The parts without repeats and without the edges and corners that lie inside a flat
+    surface: a face written twice (the same corners and side) is kept once; an edge is
+    dropped where the faces that share it (an outline side of each, the same two corners) lie
+    in one plane, within WELD_ANGLE, on either side of it, two for each side the surface is
+    met from (tiles of a plane, the triangles of a flat mesh: no contact geometry there, and
+    a sphere rolls across as on the plane); a corner is dropped where every edge that ends at
+    it was; an edge or a corner that several walls share is kept once. Corners match when
+    written the same, bit for bit (as in a mesh)."""
     def point(p):
         return np.asarray(p, dtype=float).tobytes()
 
     def side(a, b):
         return tuple(sorted((point(a), point(b))))
 
-    sharing: dict = {}  # side → the faces with it on their outline
+    faces_seen = set()
+    kept_faces = []
+    sharing: dict = {}  # side → (face, the direction of its inside across the side)
     for q in parts:
-        if q.kind == WK_FACE:
-            c = q.corners
-            for k in range(len(c)):
-                sharing.setdefault(side(c[k], c[(k + 1) % len(c)]), []).append(q)
+        if q.kind != WK_FACE:
+            continue
+        key = (tuple(sorted(point(c) for c in q.corners)), q.normal.tobytes())
+        if len(q.corners) and key in faces_seen:
+            continue  # the same face again
+        faces_seen.add(key)
+        kept_faces.append(q)
+        c = q.corners
+        for k in range(len(c)):
+            a, b = c[k], c[(k + 1) % len(c)]
+            inward = np.cross(q.normal, b - a)  # (which way the face lies from the side)
+            if np.dot(inward, c.mean(axis=0) - a) < 0.0:
+                inward = -inward
+            sharing.setdefault(side(a, b), []).append((q, inward))
     flat = set()
+    cos_weld = math.cos(WELD_ANGLE)
     for key, faces in sharing.items():
-        normals: dict = {}
-        for f in faces:
-            normals.setdefault(tuple(np.round(f.normal, 12)), []).append(f)
-        n0 = faces[0].normal
-        if all(len(group) >= 2 and abs(abs(float(np.dot(group[0].normal, n0))) - 1.0) < FLAT_REL
-               and abs(float(np.dot(group[0].point - faces[0].point, n0))) <= FLAT_REL * (
-                   1.0 + float(np.max(np.abs(faces[0].corners))))
-               for group in normals.values()):
+        n0 = faces[0][0].normal
+        groups = ([f for f in faces if np.dot(f[0].normal, n0) >= cos_weld],
+                  [f for f in faces if np.dot(f[0].normal, n0) <= -cos_weld])
+        if len(groups[0]) + len(groups[1]) != len(faces):
+            continue  # a fold
+        if all(not g or any(np.dot(f[1], h[1]) < 0.0 for f in g for h in g) for g in groups):
             flat.add(key)
     out, seen, ends = [], set(), set()
     for q in parts:
+        if q.kind == WK_FACE:
+            if any(q is f for f in kept_faces):
+                out.append(q)
+            continue
         if q.kind == WK_CYLINDER and len(q.corners) == 2:
             key = side(*q.corners)
             if key in flat or key in seen:

@@ -376,10 +376,11 @@ def _check_scene(scene) -> None:
             raise InputError(f"effect '{name}' is not modelled by the fixed-step integrator",
                              "effects")
     driven = [w.key for w in scene.walls if getattr(w, "motion", None) is not None
-              or not hasattr(w, "normal")]
+              or not hasattr(w, "normal") or hasattr(w, "kind")]
     if driven:
-        raise InputError("the fixed-step integrator has fixed planes only (a moving plane or "
-                         "a cylinder is not modelled)", driven[0])
+        raise InputError("the fixed-step integrator has fixed planes only (a moving plane, a "
+                         "cylinder, a finite wall or a fixed sphere is not modelled)",
+                         driven[0])
 
 
 def run_fixed_step(scene, *, dt: float, until: float, frame_interval: float,

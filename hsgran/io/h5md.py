@@ -1326,7 +1326,8 @@ def _checked_walls(walls: Walls, n_materials: int) -> Walls:
     if walls.kind is not None:
         kind = _checked(walls.kind, "walls.kind", (p,), np.int8)
         geometry = _checked(walls.geometry, "walls.geometry", (p, GEO_SIZE), np.float64)
-        lines = _checked(walls.lines, "walls.lines", (len(walls.lines), 3), np.float64)
+        lines = np.zeros((0, 3)) if walls.lines is None else walls.lines
+        lines = _checked(lines, "walls.lines", (len(lines), 3), np.float64)
     return Walls(point, normal, material, [str(k) for k in walls.key], motion, cylinder, kind,
                  geometry, lines)
 
