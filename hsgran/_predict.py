@@ -326,10 +326,13 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
                                       walls.planes_geo, w)
             if not on_face(fu, fv, planes_p, walls.planes_geo, walls.face_lines, w):
                 tau = NEVER
-            elif tau == 0.0 and face_leave_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2],
+            elif gap == 0.0 and face_leave_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2],
                                                 planes_p, walls.planes_geo, walls.face_lines,
                                                 w) == 0.0:
-                tau = NEVER  # touching at its outline, leaving it: the edge's (END_OFF)
+                # touching it at its outline and leaving it (the sphere's foot left it now,
+                # END_OFF): no contact, whether the plane's time came out 0 or a rounding
+                # later; the next part takes the sphere
+                tau = NEVER
         if tau < best:
             best = tau
             kind = EV_WALL
