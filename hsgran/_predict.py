@@ -190,7 +190,7 @@ def near_wall(k, walls, grid, a):
     """The k-th wall of :func:`near_walls` (``a``: its second value)."""
     n_global = walls.global_rows.shape[0]
     if k < n_global:
-        return walls.global_rows[k]
+        return k  # (the first rows: global_rows[k] == k)
     return grid.part_items[a + k - n_global]
 
 

@@ -54,8 +54,9 @@ Dyn = namedtuple("Dyn", "omg inv_m inv_i mat zstreak alpha seg_dir t_last row_tc
 #: parts of finite walls and the fixed spheres (docs/walls.md, "Finite walls") keep their
 #: geometry in ``planes_geo`` (``FC_*`` columns for a face, ``BL_RADIUS`` for a ball) and the
 #: faces' outlines and holes in ``face_lines`` (rows a, b, c of a u + b v ≤ c).
-#: ``global_rows``: the walls every prediction looks at (planes, cylinders, unbounded faces);
-#: the other parts only through the cell lists ``Grid.part_start``, ``Grid.part_items``.
+#: ``global_rows``: the walls every prediction looks at (planes, cylinders, unbounded faces),
+#: always the first rows 0 … G − 1; the other parts only through the cell lists
+#: ``Grid.part_start``, ``Grid.part_items``.
 Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg planes_mot "
                             "planes_kind planes_cyl outlets planes_geo face_lines global_rows")
 #: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic; ``slack``: a

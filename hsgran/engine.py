@@ -299,6 +299,9 @@ def _wall_lists(scene, origin, csize, ncell):
             lower.append(box[0] - reach)
             upper.append(box[1] + reach)
     rows = np.array(rows, dtype=np.int64)
+    if not np.array_equal(rows, np.arange(len(rows))):  # (_predict.near_wall relies on it)
+        raise SimulationError("the faces without outline must come first among the scene's "
+                              "parts (hsgran.scene._make_parts orders them so)")
     if not local:
         return rows, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     start, items = part_lists(np.array(lower), np.array(upper), origin, csize, ncell,

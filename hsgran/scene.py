@@ -1192,7 +1192,11 @@ def _make_parts(walls: _Walls, material_names: list[str], fixed: list[dict]) -> 
     for p in fixed:
         parts.append(shapes.ball(p["position"], p["radius"], material_names.index(p["material"]),
                                  p["key"]))
-    return tuple(shapes.weld(parts))
+    parts = shapes.weld(parts)
+    # the faces without outline first: every prediction looks at them (after the planes and
+    # cylinders, the first wall rows), the others through the cell grid (engine._wall_lists)
+    return tuple([q for q in parts if q.bounds() is None]
+                 + [q for q in parts if q.bounds() is not None])
 
 
 def _parse_cylinder(w: dict, key: str, library: MaterialLibrary, periodic: tuple) -> dict:
