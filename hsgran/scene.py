@@ -1038,10 +1038,7 @@ def _parse_finite(w: dict, key: str, kind: str, library: MaterialLibrary) -> dic
         center = _vector(_require(w, "center", key, "[x, y, z] in m"), f"{key}.center")
         radius = check_positive(_require(w, "radius", key, "in m"), f"{key}.radius", "m")
         return dict(kind=kind, key=key, center=center, radius=radius, material=material)
-    faces = _string(w.get("faces", "both"), f"{key}.faces")
-    if faces not in FACE_SIDES:
-        raise InputError(f"unknown side '{faces}'{did_you_mean(faces, FACE_SIDES)}; known: "
-                         f"{', '.join(FACE_SIDES)}", f"{key}.faces")
+    faces = _face_sides(w, key)
     if kind == "polygon":
         value = _require(w, "vertices", key, "a list of [x, y, z] in m, in order around it")
         if not isinstance(value, list) or len(value) < shapes.MIN_SIDES:
@@ -1074,10 +1071,7 @@ def _parse_mesh(w: dict, key: str, library: MaterialLibrary, source: str) -> dic
     path = Path(name)
     if not path.is_absolute() and source != "<string>":
         path = Path(source).parent / path
-    faces = _string(w.get("faces", "both"), f"{key}.faces")
-    if faces not in FACE_SIDES:
-        raise InputError(f"unknown side '{faces}'{did_you_mean(faces, FACE_SIDES)}; known: "
-                         f"{', '.join(FACE_SIDES)}", f"{key}.faces")
+    faces = _face_sides(w, key)
     scale = check_positive(w.get("scale", 1.0), f"{key}.scale", "m per file unit")
     offset = _vector(w["offset"], f"{key}.offset") if "offset" in w else np.zeros(3)
     try:
@@ -1096,6 +1090,33 @@ def _parse_mesh(w: dict, key: str, library: MaterialLibrary, source: str) -> dic
         except ValueError as exc:
             raise InputError(f"triangle {k}: {exc}", f"{key}.file") from None
     return dict(kind="mesh", key=key, parts=parts, material=material)
+
+
+def _flag(table: dict, name: str, key: str) -> bool:
+    """``table[name]``, true or false (false when not given)."""
+    value = table.get(name, False)
+    if not isinstance(value, bool):
+        raise InputError(f"must be true or false, got {short_repr(value)}", f"{key}.{name}")
+    return value
+
+
+def _fixed(table: dict, key: str, motion: tuple) -> bool:
+    """The ``fixed`` flag of a [[particles]] or [[fill]] entry; a fixed sphere may not be
+    given any of the ``motion`` keys."""
+    fixed = _flag(table, "fixed", key)
+    for name in motion if fixed else ():
+        if name in table:
+            raise InputError("a fixed sphere does not move; remove it", f"{key}.{name}")
+    return fixed
+
+
+def _face_sides(table: dict, key: str) -> str:
+    """``faces`` of a polygon, disk or mesh: which sides spheres meet (FACE_SIDES)."""
+    faces = _string(table.get("faces", "both"), f"{key}.faces")
+    if faces not in FACE_SIDES:
+        raise InputError(f"unknown side '{faces}'{did_you_mean(faces, FACE_SIDES)}; known: "
+                         f"{', '.join(FACE_SIDES)}", f"{key}.faces")
+    return faces
 
 
 def _corner_count(table: dict, key: str) -> int:
@@ -1409,14 +1430,7 @@ def _parse_particles(doc: dict, library: MaterialLibrary, effects: Effects) -> l
     for k, p in enumerate(_array_of_tables(doc, "particles")):
         key = f"particles[{k}]"
         _check_keys(p, PARTICLE_KEYS, key)
-        fixed = p.get("fixed", False)
-        if not isinstance(fixed, bool):
-            raise InputError(f"must be true or false, got {short_repr(fixed)}", f"{key}.fixed")
-        if fixed:  # a fixed sphere: a wall (any material), never moving
-            for name in ("velocity", "angular_velocity"):
-                if name in p:
-                    raise InputError("a fixed sphere does not move; remove it",
-                                     f"{key}.{name}")
+        fixed = _fixed(p, key, ("velocity", "angular_velocity"))  # (a wall, any material)
         material = (_material_name if fixed else _particle_material)(
             library, _require(p, "material", key, "a material name"), f"{key}.material")
         radius = check_positive(_require(p, "radius", key, "in m"), f"{key}.radius", "m")
@@ -1515,14 +1529,9 @@ def _parse_fills(doc: dict, library: MaterialLibrary, effects: Effects,
         key = f"fill[{k}]"
         _check_keys(f, FILL_KEYS, key)
         count = _count(_require(f, "count", key, "number of spheres"), f"{key}.count")
-        fixed = f.get("fixed", False)
-        if not isinstance(fixed, bool):
-            raise InputError(f"must be true or false, got {short_repr(fixed)}", f"{key}.fixed")
+        fixed = _fixed(f, key, ("speed", "angular_velocity"))
         if fixed:
             fixed_keys.add(key)
-            for name in ("speed", "angular_velocity"):
-                if name in f:
-                    raise InputError("fixed spheres do not move; remove it", f"{key}.{name}")
         material = (_material_name if fixed else _particle_material)(
             library, _require(f, "material", key, "a material name"), f"{key}.material")
         r_min, r_max = _radius_range(f, key)
@@ -1576,10 +1585,7 @@ def _parse_inflows(doc: dict, library: MaterialLibrary, walls: _Walls,
     for k, t in enumerate(_array_of_tables(doc, "inflow")):
         key = f"inflow[{k}]"
         _check_keys(t, INFLOW_KEYS, key)
-        recirculate = t.get("recirculate", False)
-        if not isinstance(recirculate, bool):
-            raise InputError(f"must be true or false, got {short_repr(recirculate)}",
-                             f"{key}.recirculate")
+        recirculate = _flag(t, "recirculate", key)
         entry = dict(key=key, index=k, recirculate=recirculate, count=0, material=None,
                      radius=(0.0, 0.0))
         if recirculate:
