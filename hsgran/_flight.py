@@ -275,7 +275,7 @@ def moving(walls, w):
 def holds_now(walls, w, t, gravity):
     """Whether wall w can hold a sphere that lands on it at time t [s]: any wall but a moving
     plane that pulls away from its spheres then (hsgran._riding) and a fixed sphere or corner
-    (a sphere has no motion state on it: it bounces, or a cluster holds it)."""
+    (a sphere has no motion state on it: it bounces; the cluster treatment refuses them)."""
     if ball(walls, w):
         return False
     return not moving(walls, w) or takeoff_delay(gravity, walls, w, t) > 0.0

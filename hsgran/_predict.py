@@ -175,9 +175,9 @@ def cell_heads(s, grid, space):
 @njit(inline="always")
 def near_walls(i, walls, grid):
     """(how many walls sphere i looks at, where its cell's parts start in ``part_items``):
-    the walls every prediction looks at (``Walls.global_rows``), then the parts of finite
+    the walls every prediction looks at (the first ``Walls.n_global``), then the parts of finite
     walls listed in its cell (events.grid.part_lists); walk them with :func:`near_wall`."""
-    n_global = walls.global_rows.shape[0]
+    n_global = walls.n_global[0]
     if grid.part_items.shape[0] == 0:
         return n_global, 0
     s = slot_of(grid.cell[i, 0], grid.cell[i, 1], grid.cell[i, 2], grid.ncell)
@@ -188,20 +188,17 @@ def near_walls(i, walls, grid):
 @njit(inline="always")
 def near_wall(k, walls, grid, a):
     """The k-th wall of :func:`near_walls` (``a``: its second value)."""
-    n_global = walls.global_rows.shape[0]
+    n_global = walls.n_global[0]
     if k < n_global:
-        return k  # (the first rows: global_rows[k] == k)
+        return k
     return grid.part_items[a + k - n_global]
 
 
 @njit
-def other_wall_time(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, t_now, horizon, supported,
-                    slack, seg_left):
+def other_wall_time(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, t_now, horizon):
     """Delay [s] until a sphere of radius r [m] at (x, y, z) [m] with velocity (u, v, w_) [m/s]
     and acceleration (gx, gy, gz) [m/s²] at t_now [s] meets wall w, a moving plane, a
-    cylinder, an edge or a fixed sphere; ``inf`` if not within ``horizon`` [s].
-    ``supported``: the sphere is in constrained motion (MS_SUPPORTED) for ``seg_left`` [s]
-    more, with the cluster solver's tolerance ``slack`` [m/s] (held_apart)."""
+    cylinder, an edge or a fixed sphere; ``inf`` if not within ``horizon`` [s]."""
     if moving(walls, w):
         n = walls.planes_n
         gap, cn = moving_gap(x, y, z, r, walls, w, t_now)
@@ -212,13 +209,9 @@ def other_wall_time(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, t_now, horizon, 
     x_sum = abs(x) + abs(y) + abs(z)
     p = walls.planes_p
     if walls.planes_kind[w] == WK_BALL:
-        # a fixed sphere or a corner (hsgran.facets); a sphere in constrained motion that
-        # rests on it meets it no earlier than its segment's end (held_apart, as for a pair)
-        sigma = r + walls.planes_geo[w, BL_RADIUS]
-        dx, dy, dz = x - p[w, 0], y - p[w, 1], z - p[w, 2]
-        if supported and held_apart(dx, dy, dz, u, v, w_, gx, gy, gz, sigma, slack, seg_left):
-            return NEVER
-        return ball_contact_time(dx, dy, dz, u, v, w_, gx, gy, gz, sigma, horizon, v_sum, x_sum)
+        # a fixed sphere or a corner (hsgran.facets)
+        return ball_contact_time(x - p[w, 0], y - p[w, 1], z - p[w, 2], u, v, w_, gx, gy, gz,
+                                 r + walls.planes_geo[w, BL_RADIUS], horizon, v_sum, x_sum)
     cyl = walls.planes_cyl
     side = cyl[w, CY_SIDE]
     qx, qy, qz = axis_offset(x, y, z, walls, w)
@@ -297,8 +290,7 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
         wkind = walls.planes_kind[w]
         if wkind != WK_PLANE and wkind != WK_FACE:
             tau = other_wall_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], ri, walls, w,
-                                  t_now, best, supported, space.slack[0],
-                                  seg_end[i] - t_now if supported else NEVER)
+                                  t_now, best)
             if tau < best:
                 best = tau
                 kind = EV_WALL

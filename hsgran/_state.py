@@ -54,11 +54,11 @@ Dyn = namedtuple("Dyn", "omg inv_m inv_i mat zstreak alpha seg_dir t_last row_tc
 #: parts of finite walls and the fixed spheres (docs/walls.md, "Finite walls") keep their
 #: geometry in ``planes_geo`` (``FC_*`` columns for a face, ``BL_RADIUS`` for a ball) and the
 #: faces' outlines and holes in ``face_lines`` (rows a, b, c of a u + b v ≤ c).
-#: ``global_rows``: the walls every prediction looks at (planes, cylinders, unbounded faces),
+#: ``n_global``: G, the walls every prediction looks at (planes, cylinders, unbounded faces),
 #: always the first rows 0 … G − 1; the other parts only through the cell lists
 #: ``Grid.part_start``, ``Grid.part_items``.
 Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg planes_mot "
-                            "planes_kind planes_cyl outlets planes_geo face_lines global_rows")
+                            "planes_kind planes_cyl outlets planes_geo face_lines n_global")
 #: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic; ``slack``: a
 #: touching contact of a sphere in constrained motion (MS_SUPPORTED, hsgran._cluster) whose
 #: normal velocity stays above −slack[0] [m/s] until its segment ends is no contact event (the
@@ -257,7 +257,6 @@ class Sizes:
     observables: bool = False  #: stress and wall impulses are summed (hsgran._observe)
     outlets: int = 0  #: outlets
     lines: int = 0  #: rows of the faces' outlines and holes (hsgran.facets)
-    global_walls: int = 0  #: walls every prediction looks at (``Walls.global_rows``)
     part_items: int = 0  #: entries of the parts' cell lists (0: no such parts)
     open_system: bool = False  #: spheres may leave or enter (outlets or inflows)
 
@@ -289,7 +288,6 @@ class Sizes:
             # an open system: which spheres are present (none in a closed one)
             "outlets": self.outlets,
             "lines": max(self.lines, 1),
-            "gw": self.global_walls,
             "pi": self.part_items,
             "ps": self.cells + 1 if self.part_items else 0,
             "op": n if self.open_system else 0,
@@ -351,7 +349,7 @@ FIELDS = (
     _f("Walls", "planes_cyl", "f8", ("planes", CY_SIZE)),
     _f("Walls", "planes_geo", "f8", ("planes", GEO_SIZE)),
     _f("Walls", "face_lines", "f8", ("lines", 3)),
-    _f("Walls", "global_rows", "i8", ("gw",)),
+    _f("Walls", "n_global", "i8", (1,)),
     _f("Walls", "outlets", "f8", ("outlets", OL_SIZE)),
     _f("Space", "gravity", "f8", (3,)),
     _f("Space", "box_len", "f8", (3,)),

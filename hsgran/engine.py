@@ -76,8 +76,9 @@ EVENTS_PER_CALL = 200_000
 #: ``wm_f``; 11: open systems: the outlets and each sphere's presence, ``outlets`` and
 #: ``present``, the energy carried out and brought in, ``F_EXITED`` and ``F_ENTERED``, and the
 #: inflows' progress ``inflow_state``; 12: the finite walls and fixed spheres, ``planes_geo``
-#: and ``face_lines``, and the edges' column ``CY_FINITE`` of ``planes_cyl``).
-CHECKPOINT_VERSION = 12
+#: and ``face_lines``, and the edges' column ``CY_FINITE`` of ``planes_cyl``; 13: the count
+#: of walls every prediction looks at ``n_global``, in place of their rows).
+CHECKPOINT_VERSION = 13
 
 
 class SimulationError(HsgranError):
@@ -282,31 +283,29 @@ PART_REACH_REL = 1e-9
 
 
 def _wall_lists(scene, origin, csize, ncell):
-    """(the walls every prediction looks at, the parts' cell lists ``start``, ``items``): the
-    planes, cylinders and unbounded faces are looked at always, the other parts of finite
-    walls (and the fixed spheres) through the cells their box meets, grown by the largest
-    radius (events.grid.part_lists)."""
-    n_fixed = len(scene.planes) + len(scene.cylinders)
-    rows = list(range(n_fixed))
+    """(G, the parts' cell lists ``start``, ``items``): the first G walls (planes, cylinders
+    and unbounded faces, which the scene puts first among its parts) are looked at always, the
+    other parts of finite walls (and the fixed spheres) through the cells their box meets,
+    grown by the largest radius (events.grid.part_lists)."""
+    n_global = len(scene.planes) + len(scene.cylinders)
     local, lower, upper = [], [], []
     reach = float(np.max(scene.radius)) * (1.0 + PART_REACH_REL)
-    for k, q in enumerate(scene.parts, start=n_fixed):
+    for k, q in enumerate(scene.parts, start=len(scene.planes) + len(scene.cylinders)):
         box = q.bounds()
         if box is None:
-            rows.append(k)
+            if local:  # (_predict.near_wall relies on the order)
+                raise SimulationError("the faces without outline must come first among the "
+                                      "scene's parts (hsgran.scene._make_parts orders them so)")
+            n_global += 1
         else:
             local.append(k)
             lower.append(box[0] - reach)
             upper.append(box[1] + reach)
-    rows = np.array(rows, dtype=np.int64)
-    if not np.array_equal(rows, np.arange(len(rows))):  # (_predict.near_wall relies on it)
-        raise SimulationError("the faces without outline must come first among the scene's "
-                              "parts (hsgran.scene._make_parts orders them so)")
     if not local:
-        return rows, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        return n_global, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     start, items = part_lists(np.array(lower), np.array(upper), origin, csize, ncell,
                               np.asarray(scene.periodic, dtype=bool))
-    return rows, start, np.array(local, dtype=np.int64)[items]
+    return n_global, start, np.array(local, dtype=np.int64)[items]
 
 
 def _fill_from_scene(a: dict, scene, mass: np.ndarray) -> None:
@@ -403,7 +402,7 @@ class Simulation:
         self.pair_table = np.ascontiguousarray(scene.pair_table())
         self.notes = scene_notes(scene, self.pair_table)  #: see RunSummary.notes
         origin, csize, ncell, box_len = _grid_plan(scene, brute_force)
-        global_rows, part_start, part_items = _wall_lists(scene, origin, csize, ncell)
+        n_global, part_start, part_items = _wall_lists(scene, origin, csize, ncell)
         per_frame = max(1, n * 3 * 8 * (3 if self.rotation else 2) + n)  # + motion states
         sizes = Sizes(n=n, gravity=bool(eff.gravity), rotation=self.rotation,
                       planes=len(scene.walls), cells=int(np.prod(ncell)),
@@ -414,7 +413,7 @@ class Simulation:
                       clusters=bool(self.flags[es.FL_CLUSTERS]),
                       observables=bool(scene.observables), outlets=len(scene.outlets),
                       lines=sum(len(q.lines) for q in scene.parts),
-                      global_walls=len(global_rows), part_items=len(part_items),
+                      part_items=len(part_items),
                       open_system=scene.open_system)
         if large is None:
             large = n >= LARGE_FROM
@@ -422,7 +421,7 @@ class Simulation:
         a["origin"][:], a["csize"][:], a["ncell"][:], a["box_len"][:] = (origin, csize, ncell,
                                                                           box_len)
         _fill_from_scene(a, scene, self.mass)
-        a["global_rows"][:] = global_rows
+        a["n_global"][0] = n_global
         if len(part_items):
             a["part_start"][:], a["part_items"][:] = part_start, part_items
         if self.flags[es.FL_CLUSTERS]:

@@ -384,14 +384,11 @@ def wall_cylinders(traj) -> list[Cylinder]:
 
 
 def wall_parts(traj) -> list:
-    """The parts of the finite walls and the fixed spheres (hsgran.shapes.Part), from the
-    file's walls (or its scene text, as :func:`wall_planes`)."""
+    """The parts of the finite walls and the fixed spheres (hsgran.shapes.Part) in the file's
+    walls (a file without its walls stored was written before finite walls existed)."""
     walls = traj.walls
     if walls is None:
-        try:
-            return list(parse_scene(traj.scene_text, overrides=traj.overrides or None).parts)
-        except InputError:
-            return []  # wall_planes has warned
+        return []
     return [walls.part(k) for k in range(len(walls)) if walls.is_part(k)]
 
 
