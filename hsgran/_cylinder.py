@@ -161,11 +161,26 @@ def carry_round(p, st, omg, walls, w, rotation):
 def cylinder_load(x, y, z, vx, vy, vz, gravity, walls, w):
     """Normal load per unit mass [m/s²] of a sphere centred at (x, y, z) [m] moving at
     (vx, vy, vz) [m/s] on cylinder w: −g·n plus the centripetal acceleration c²/ρ inside (the
-    wall turns the centre's path), minus it outside (docs/walls.md, "On a cylinder")."""
+    wall turns the centre's path), minus it outside (docs/walls.md, "On a cylinder").
+
+    Where the wall carries none of the weight (−g·n ≤ 0: a silo's upright side, a drum's
+    overhang), the motion alone holds the sphere on it, and only while c²/ρ exceeds the pull
+    of gravity along the axis |g·a|; a slower sphere is not held (load −g·n ≤ 0) and falls
+    along the side instead of riding it [OURS]. (A bead creeping at 10⁻¹¹ m/s against a silo's
+    side, on a bead below, was put on the side by a load of 10⁻¹⁹ m/s², slid down it onto
+    that bead at once, and back, without end.) A drum's axis is level: unchanged there."""
     d, _, e, n = _frame(x, y, z, walls, w)
     c = vx * e[0] + vy * e[1] + vz * e[2]
     gn = -(gravity[0] * n[0] + gravity[1] * n[1] + gravity[2] * n[2])
-    return gn + walls.planes_cyl[w, CY_SIDE] * c * c / d if d > 0.0 else gn
+    if d <= 0.0:
+        return gn
+    cyl = walls.planes_cyl
+    held = cyl[w, CY_SIDE] * c * c / d
+    if gn <= 0.0 < held and held <= abs(gravity[0] * cyl[w, CY_AXIS]
+                                        + gravity[1] * cyl[w, CY_AXIS + 1]
+                                        + gravity[2] * cyl[w, CY_AXIS + 2]):
+        return gn
+    return gn + held
 
 
 @njit

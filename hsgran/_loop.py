@@ -79,6 +79,7 @@ from hsgran._settling import (
     SETTLE_NONE,
     SETTLE_SLEEP,
     SETTLE_STOP,
+    STAGE_HOP,
     collide_pair,
     collide_wall,
     lands_before_wall,
@@ -140,6 +141,7 @@ from hsgran.events.kinds import (
     EV_CLUSTER,
     EV_EXIT,
     EV_FRAME,
+    EV_HOP,
     EV_LAND,
     EV_MISS,
     EV_PAIR,
@@ -497,8 +499,8 @@ def _wall_handler(grav_on):
             counts[EV_CLUSTER] += 1
             return _finish_collision(EV_WALL, i, -1 - w, t, False, False, -1, -1, st, mstate,
                                      zstreak, out, fsc, isc, counts, rec, log_on)
-        if grav_on and lands_before_wall(i, w, t, flight, dyn, walls, space.gravity, pair_table,
-                                         fsc, flags):
+        if grav_on and lands_before_wall(i, w, t, flight, dyn, walls, grid, space.gravity,
+                                         pair_table, fsc, flags):
             counter[i] += 1
             repredict_later(isc, i)
             counts[EV_LAND] += 1
@@ -533,6 +535,8 @@ def _wall_handler(grav_on):
             return GO_ON
         if obs_on:
             book_wall(i, w, p_i, flight, dyn, walls, grav_on)
+        if rec[REC_STAGE] == STAGE_HOP:
+            counts[EV_HOP] += 1  # a sphere on a wall sent off another (_settling._wall_hop)
         if landed:
             counts[EV_LAND] += 1
         counter[i] += 1

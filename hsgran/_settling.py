@@ -420,14 +420,59 @@ def _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, tc):
 
 
 @njit
+def _wall_hop(i, w, t, ax, ay, az, ci, inv_mi, flight, walls, rec, tc):
+    """A hop of sphere i, on a wall of normal a = (ax, ay, az), off a fixed wall w that its
+    motion on its wall presses it into (a_n > 0: its acceleration there towards w, plus c²/ρ
+    along a cylinder's inside) and that it meets slower than v_hop = a_n t_c / 2 [OURS; the
+    wall form of _hop, whose reasons it shares]. ``ci`` = −n_w·a is the cosine between the two
+    normals (< 1), ``inv_mi`` the sphere's inverse mass backed by its wall, (1 − ci²)/m.
+
+    A sphere sliding on a silo's floor along its cylindrical side keeps meeting the side: its
+    straight path on the floor turns into the side at c²/ρ. Left to collisions, their normal
+    speeds shrank to nothing and the sphere met the side 10¹⁰ times a second. The hop sets the
+    normal speed off w to +v_hop within the sphere's wall (the change is along n_w − (n_w·a) a,
+    so it stays on its wall), and the sphere meets w again a TC time later: it follows the
+    side in chords of c t_c. The kinetic energy it adds is booked as negative dissipation.
+    Returns False (nothing done) where w does not press the sphere or it meets faster."""
+    st, acc = flight.st, flight.acc
+    a_n, vn = pressed(i, w, t, st, walls, acc[i])
+    if not a_n > 0.0 or tc <= 0.0:
+        return False
+    v_hop = 0.5 * a_n * tc
+    if vn >= v_hop or -vn > v_hop:
+        return False
+    nx, ny, nz = walls.planes_n[w, 0], walls.planes_n[w, 1], walls.planes_n[w, 2]
+    scale = (v_hop - vn) / (1.0 - ci * ci)
+    ke0 = st[i, 3] ** 2 + st[i, 4] ** 2 + st[i, 5] ** 2
+    st[i, 3] += scale * (nx + ci * ax)
+    st[i, 4] += scale * (ny + ci * ay)
+    st[i, 5] += scale * (nz + ci * az)
+    ke1 = st[i, 3] ** 2 + st[i, 4] ** 2 + st[i, 5] ** 2
+    for k in range(rec.shape[0]):
+        rec[k] = math.nan
+    rec[REC_J_N] = (v_hop - vn) / inv_mi
+    rec[REC_J_T] = 0.0
+    rec[REC_E_N] = math.nan
+    rec[REC_STAGE] = STAGE_HOP
+    rec[REC_REGIME] = 0
+    rec[REC_ENERGY_LOST] = -0.5 * (ke1 - ke0) * (1.0 - ci * ci) / inv_mi
+    return True
+
+
+@njit
 def _resting_plane(i, st, walls, grid, gravity, v_land):
     """A plane that sphere i (in flight) touches within rounding while gravity presses it onto
     it and it moves off or onto it slower than the landing speed ``v_land`` [m/s], or −1. Such
     a sphere lands there at once: the rebound it would make is a landing's (the normal speed
     given up is at most v_land) [OURS]. A sphere wedged between neighbours on a plane and
     hopped off them, slightly upwards, would otherwise meet them again and again before it
-    ever came back to the plane."""
+    ever came back to the plane. Of several such planes, the one that carries the most of its
+    weight (the largest load g_n): a sphere standing still in the corner of a silo's floor and
+    its cylindrical side touches both, and the side's load, the centripetal c²/ρ of a creeping
+    sphere, is next to nothing (on the side, gravity pulls it back onto the floor at once)."""
     n_near, first_part = near_walls(i, walls, grid)
+    best = -1
+    best_gn = 0.0
     for k in range(n_near):
         w = near_wall(k, walls, grid, first_part)
         if moving(walls, w) or not holds_now(walls, w, 0.0, gravity):
@@ -436,9 +481,10 @@ def _resting_plane(i, st, walls, grid, gravity, v_land):
         gap = wall_gap(i, w, st, walls)
         if gap <= PLANE_TOUCHING_REL * st[i, S_R]:
             gn, vn = pressed(i, w, 0.0, st, walls, gravity)
-            if gn > 0.0 and abs(vn) <= v_land:
-                return w
-    return -1
+            if gn > best_gn and abs(vn) <= v_land:
+                best = w
+                best_gn = gn
+    return best
 
 
 SETTLE_NONE = 0  #: the pair collides
@@ -654,16 +700,53 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
 
 
 @njit(inline="always")
-def lands_before_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, flags):
+def _falls_back(i, a, w, st, walls, gravity, v_land):
+    """Whether sphere i, on wall a (or touching it, gravity pressing it on) and meeting wall w,
+    would close on a at once if it moved onto w [OURS]: it does not leave a (normal speed off
+    it at most the landing speed ``v_land`` [m/s]) and gravity along w's surface presses it
+    into a.
+
+    A sphere sliding on a silo's floor along its cylindrical side is pressed into the side by
+    its own motion (the centripetal load c²/ρ, hsgran._cylinder), but on the side gravity
+    pulls it straight back onto the floor it touches: moved onto the side it landed on the
+    floor again at the same instant, and back, without end (a 1200-bead silo pour stopped at
+    the collapse guard at 0.058 s). Such a sphere stays on a, and the collision with w is
+    backed by a (collide_wall). A sphere rolling from a floor up a slope moves away from the
+    floor and does move onto the slope."""
+    ax, ay, az = wall_normal(walls, a, st[i, 0], st[i, 1], st[i, 2])
+    if st[i, 3] * ax + st[i, 4] * ay + st[i, 5] * az > v_land:
+        return False
+    nx, ny, nz = walls.planes_n[w, 0], walls.planes_n[w, 1], walls.planes_n[w, 2]
+    gw = gravity[0] * nx + gravity[1] * ny + gravity[2] * nz
+    # gravity along w's surface, dotted with a's normal
+    return ((gravity[0] - gw * nx) * ax + (gravity[1] - gw * ny) * ay
+            + (gravity[2] - gw * nz) * az) < 0.0
+
+
+@njit(inline="always")
+def lands_before_wall(i, w, t, flight, dyn, walls, grid, gravity, pair_table, fsc, flags):
     """Whether sphere i, meeting plane w at time t, is too slow to bounce and stays on it
     instead (MODEL §5.3; what is given up is the rebound, at most ½ m v_land², see
-    hsgran.scene). It is then put on the plane."""
+    hsgran.scene). It is then put on the plane.
+
+    Not if on w it would fall back at once onto the wall a it is on, or, in flight, the wall
+    it rests on (_resting_plane; it lands there instead): it stays on a, and the collision
+    with w is backed by a (_falls_back, collide_wall)."""
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
     gn, vn = pressed(i, w, t, flight.st, walls, gravity)
     if not (gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]):
         return False
     if not holds_now(walls, w, t, gravity):
         return False  # a moving plane pulling away: it hits the sphere (or misses it)
+    v_land = fsc[F_LANDING_SPEED]
+    a = np.int64(flight.mplane[i])
+    if flight.mstate[i] == MS_FLIGHT:
+        a = _resting_plane(i, flight.st, walls, grid, gravity, v_land)
+    if a >= 0 and a != w and _falls_back(i, a, w, flight.st, walls, gravity, v_land):
+        if flight.mstate[i] == MS_FLIGHT:
+            enter_plane(i, a, t, np.int64(END_NONE), flight, dyn, walls, gravity, pair_table,
+                        fsc, friction, rolling, rotation)
+        return False  # on a, backed by it against w (collide_wall)
     if flight.mstate[i] != MS_FLIGHT:
         leave_plane(i, flight, dyn, gravity, rotation)
     enter_plane(i, w, t, np.int64(END_NONE), flight, dyn, walls, gravity, pair_table, fsc,
@@ -705,12 +788,19 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
             ci = -1.0
     vi0x, vi0y, vi0z = st[i, 3], st[i, 4], st[i, 5]
     inv_mi = inv_m[i] * (1.0 - ci * ci) if ci >= 0.0 else inv_m[i]
+    # a backed sphere that its motion on its wall presses into w and that meets w slower than
+    # a hop: a hop off w instead of a collision (_wall_hop)
+    driven = not immovable(walls, w)
+    if ci >= 0.0 and not driven and _wall_hop(i, w, t, pnx, pny, pnz, ci, inv_mi, flight,
+                                              walls, rec, fsc[F_TC_TIME]):
+        enter_plane(i, np.int64(mplane[i]), t, no_end, flight, dyn, walls, gravity, pair_table,
+                    fsc, friction, rolling, rotation)
+        return True, False, False, False
     row, tc_on = tc_row(pair_table[dyn.mat[i], planes_mat[w]], t, dyn.t_last[i], -NEVER, fsc,
                         dyn.row_tc)
     # a moving plane's or a cylinder's velocity and normal at t are in planes_vel[w],
     # planes_n[w] (the wall handler); no sphere is wedge-stopped against a wall that moves or
     # turns
-    driven = not immovable(walls, w)
     hit = resolve(st[i, S_V:S_V + 3], wi, walls.planes_vel[w], walls.planes_omg[w],
                   planes_n[w, 0], planes_n[w, 1], planes_n[w, 2], inv_mi, 0.0, dyn.inv_i[i],
                   0.0, ri, 0.0, wall_curvature(walls, w, ri), row, rec, plasticity, friction,

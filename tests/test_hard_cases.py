@@ -328,9 +328,11 @@ def test_pour_of_2000_spheres_settles_to_rest_without_overlap():
 #: shrinking by ~0.9 a collision at one instant. Which pours wedge a sphere depends on the
 #: last bits of the arithmetic, which differ between CPUs (library routines picked by CPU
 #: features): on the AVX-512 machine of 2026-11-25 seeds 1 and 3 settle without a wedge and
-#: seeds 2, 13 and 16 of 1-16 have one. So the seeds of both machines are run, and at least
-#: one wedge is required among them.
-WEDGED_SEEDS = (1, 2, 3)
+#: seeds 2, 13 and 16 of 1-16 have one. Since spheres on a wall hop off the walls their
+#: motion presses them into (2026-11-27, _settling._wall_hop), seeds 8, 9 (14 stops) and 16
+#: of 1-16 have one on the machine of that day, and all 16 settle. So seeds of both machines
+#: are run, and at least one wedge is required among them.
+WEDGED_SEEDS = (2, 9, 16)
 
 
 #: 200 spheres at e = 0.5 in a 15 mm box, to 1 s (also the base of tools/settle_variants.py).

@@ -64,7 +64,8 @@ KINDS = (
               "wall)"),
     EventKind(10, "hop", False,
               "touching spheres pressed together sent apart at the hop speed instead of "
-              "colliding (also counted and logged as pair)"),
+              "colliding (also counted and logged as pair), or a sphere on a wall sent off "
+              "another wall (logged as wall)"),
     EventKind(11, "wedge", True,
               "a sphere stopped in a zero-time wedge sequence; j the other body of the "
               "collision, stage the new motion state, regime 0"),
