@@ -86,10 +86,14 @@ JAM_EVENTS = 64
 #: (MAX_ZERO_TIME_EVENTS).
 WEDGE_EVENTS = 128
 #: A jammed sphere may fall asleep on a resting sphere it meets if the contact normal points
-#: upwards at all, so that gravity presses it onto that sphere: cos ≥ 1e-6 to the vertical,
-#: far above the rounding of the direction [-]. (1e-3 left a sphere 0.05° above the equator of
-#: a sleeper, wedged between it and a side wall, hopping off it into the wall for ever.)
-JAM_SUPPORT_COS = 1e-6
+#: upwards at all, so that gravity presses it onto that sphere: cos ≥ 1e-10 to the vertical,
+#: far above the rounding of the direction [-] (the centres' offset over σ: ~1e-16 of the
+#: coordinates over σ, 5e-15 for millimetre spheres 0.1 m from the origin). (1e-3 left a
+#: sphere 0.05° above the equator of a sleeper, wedged between it and a side wall, hopping
+#: off it into the wall for ever; 1e-6 left a bead in a pocket of three resting beads on a
+#: silo's floor, 67 pm above the floor and 3.4e-8 above their equators, hopping among them at
+#: one instant until the collapse guard stopped the run.)
+JAM_SUPPORT_COS = 1e-10
 #: A sphere can fall asleep on another only if the contact normal is within 60° of the upward
 #: vertical (cos 60° = 0.5): it then lies on top of it, as in a pile, where a sphere in the
 #: pocket of three others touches each at ~35° from the vertical; a sideways touch is a
