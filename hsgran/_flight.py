@@ -30,7 +30,7 @@ from hsgran._riding import (
     ride_load,
     takeoff_delay,
 )
-from hsgran._state import F_CHI, F_TC_TIME, S_R, S_T, S_V
+from hsgran._state import F_CHI, F_LANDING_SPEED, F_TC_TIME, S_R, S_T, S_V
 from hsgran.facets import (
     END_OFF,
     FACE_BEHIND_REL,
@@ -40,7 +40,7 @@ from hsgran.facets import (
 )
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, approach_noise, flight_position, plane_gap
-from hsgran.onplane import END_NONE, MS_FLIGHT, plane_segment
+from hsgran.onplane import END_NONE, MS_FLIGHT, MS_REST, plane_segment
 from hsgran.wallmotion import wall_speed
 from hsgran.wallspec import (
     BL_RADIUS,
@@ -188,6 +188,21 @@ def leave_plane(i, flight, dyn, gravity, rotation):
 
 
 @njit
+def rest_on(i, w, flight, dyn, rotation):
+    """Sphere i rests on fixed sphere (or corner) w from now on: zero velocity, spin and
+    acceleration, motion state rest, no segment end (as a sleeper on a sphere, [OURS])."""
+    halt(i, flight.st, dyn.omg, rotation)
+    for k in range(3):
+        flight.acc[i, k] = 0.0
+        if rotation:
+            dyn.alpha[i, k] = 0.0
+    flight.mstate[i] = MS_REST
+    flight.mplane[i] = w
+    flight.seg_end[i] = NEVER
+    flight.seg_code[i] = END_NONE
+
+
+@njit
 def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling,
                  rotation):
     """Put sphere i on plane w at time t (or start its next segment there; ``snap`` is the
@@ -202,6 +217,15 @@ def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, fri
     if curved(walls, w):
         if not enter_cylinder(i, w, t, snap, (0.0, 0.0, 0.0, 0.0), flight, dyn, walls, gravity,
                               pair_table, fsc, friction, rolling, rotation):
+            leave_plane(i, flight, dyn, gravity, rotation)
+        return
+    if ball(walls, w):
+        # a fixed sphere has no motion on it: a sphere asleep there stays if slower than the
+        # landing speed (at rest), else flies (hsgran._settling._sleeps_on_ball)
+        st = flight.st
+        if st[i, 3] ** 2 + st[i, 4] ** 2 + st[i, 5] ** 2 <= fsc[F_LANDING_SPEED] ** 2:
+            rest_on(i, w, flight, dyn, rotation)
+        else:
             leave_plane(i, flight, dyn, gravity, rotation)
         return
     st, acc, mstate = flight.st, flight.acc, flight.mstate
@@ -275,7 +299,8 @@ def moving(walls, w):
 def holds_now(walls, w, t, gravity):
     """Whether wall w can hold a sphere that lands on it at time t [s]: any wall but a moving
     plane that pulls away from its spheres then (hsgran._riding) and a fixed sphere or corner
-    (a sphere has no motion state on it: it bounces; the cluster treatment refuses them)."""
+    (a sphere has no motion on it: it falls asleep there or bounces,
+    hsgran._settling._sleeps_on_ball; the cluster treatment refuses them)."""
     if ball(walls, w):
         return False
     return not moving(walls, w) or takeoff_delay(gravity, walls, w, t) > 0.0

@@ -29,6 +29,7 @@ from hsgran._flight import (
     PLANE_TOUCHING_REL,
     advance,
     approaching,
+    ball,
     curved,
     enter_plane,
     halt,
@@ -38,6 +39,7 @@ from hsgran._flight import (
     min_image,
     moving,
     pressed,
+    rest_on,
     stop_on_plane,
     tc_row,
     wall_curvature,
@@ -431,6 +433,11 @@ def _wall_hop(i, w, t, ax, ay, az, ci, inv_mi, flight, walls, rec, tc):
     wall form of _hop, whose reasons it shares]. ``ci`` = −n_w·a is the cosine between the two
     normals (< 1), ``inv_mi`` the sphere's inverse mass backed by its wall, (1 − ci²)/m.
 
+    A sphere in flight (a = 0, ci = 0) hops off a fixed sphere that gravity presses it onto
+    in the same way (collide_wall): a bead knocked off its rest on a chute's fixed bead, along
+    the fixed bead's surface, met it again at once, found it not approaching (its normal
+    speed 3e-19 m/s) and again, 1000 times, until the collapse guard stopped the run.
+
     A sphere sliding on a silo's floor along its cylindrical side keeps meeting the side: its
     straight path on the floor turns into the side at c²/ρ. Left to collisions, their normal
     speeds shrank to nothing and the sphere met the side 10¹⁰ times a second. The hop sets the
@@ -508,7 +515,8 @@ def settle(i, j, nx, ny, nz, t, flight, dyn, walls, grid, gravity, pair_table, f
        (_resting_plane): it lands there first;
     2. one falls asleep on the other (_falls_asleep; a slow support on a plane is brought to
        rest first, and if it cannot rest there, a steep incline, they collide);
-    3. both are on supports and slow (_both_slow_on_supports): both stop.
+    3. both are on supports and slow (_both_slow_on_supports): both stop, if both can rest
+       there (one on a slope too steep for rest moves on from standstill, and they collide).
 
     Returns (rule, sphere, partner): the rule that applied (SETTLE_*, SETTLE_NONE when the
     pair collides), and the sphere and partner of the event log's landing entry (partner
@@ -526,9 +534,12 @@ def settle(i, j, nx, ny, nz, t, flight, dyn, walls, grid, gravity, pair_table, f
                 counter[p] += 1
                 return SETTLE_PLANE, p, -1 - w
     rapid, zstreak = dyn.rapid, dyn.zstreak
+    # jammed: the sphere's rapid events, or the pair's zero-time ones (the event's sphere i
+    # counts them: a sphere rolling from standstill on a chute into a bead at rest on the
+    # base, both stopped and it rolling again, at one instant, 1000 times)
+    stuck = zstreak[i] > JAM_EVENTS or zstreak[j] > JAM_EVENTS
     sleeper = _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_land,
-                            rapid[i] > JAM_EVENTS or zstreak[i] > JAM_EVENTS,
-                            rapid[j] > JAM_EVENTS or zstreak[j] > JAM_EVENTS)
+                            rapid[i] > JAM_EVENTS or stuck, rapid[j] > JAM_EVENTS or stuck)
     if sleeper >= 0:
         other = j if sleeper == i else i
         if mstate[other] != MS_REST:
@@ -545,7 +556,12 @@ def settle(i, j, nx, ny, nz, t, flight, dyn, walls, grid, gravity, pair_table, f
             if mstate[p] != MS_REST:
                 stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
                                rolling, rotation)
-        return SETTLE_STOP, i, j
+        if mstate[i] == MS_REST and mstate[j] == MS_REST:
+            return SETTLE_STOP, i, j
+        # one of them cannot rest on its slope and moves on from standstill: they collide (a
+        # hop where it presses into the other); stopped again and again instead, a bead
+        # rolling down a chute's floor into one at rest on the base did so 1000 times at one
+        # instant
     return SETTLE_NONE, -1, 0
 
 
@@ -704,6 +720,31 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
 
 
 @njit(inline="always")
+def _sleeps_on_ball(i, w, gn, flight, dyn, gravity, v_land, rotation):
+    """Whether sphere i, meeting fixed sphere (or corner) w from above (load g_n = −g·n > 0
+    [m/s²]), falls asleep on it, as on a resting sphere (_falls_asleep, [OURS]): slower than
+    the landing speed ``v_land`` [m/s], with the contact within 60° of the upward vertical
+    (SUPPORT_COS), or, jammed (JAM_EVENTS rapid events in succession), pointing upwards at all
+    (JAM_SUPPORT_COS). It then rests there (hsgran._flight.rest_on) until it is hit.
+
+    A bead falling into a chute's rough base of fixed beads lands in a pocket of two or three
+    of them, which the hard-sphere loop sees as an endless buzz of collisions with each: a
+    440-bead chute stopped at the collapse guard at 0.044 s, a bead sent back and forth
+    between two fixed beads 1e-10 s apart."""
+    st = flight.st
+    if st[i, 3] ** 2 + st[i, 4] ** 2 + st[i, 5] ** 2 > v_land * v_land:
+        return False
+    g = math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    jammed = dyn.rapid[i] > JAM_EVENTS or dyn.zstreak[i] > JAM_EVENTS
+    if gn < (JAM_SUPPORT_COS if jammed else SUPPORT_COS) * g:
+        return False
+    if flight.mstate[i] != MS_FLIGHT:
+        leave_plane(i, flight, dyn, gravity, rotation)
+    rest_on(i, w, flight, dyn, rotation)
+    return True
+
+
+@njit(inline="always")
 def _falls_back(i, a, w, st, walls, gravity, v_land):
     """Whether sphere i, on wall a (or touching it, gravity pressing it on) and meeting wall w,
     would close on a at once if it moved onto w [OURS]: it does not leave a (normal speed off
@@ -740,6 +781,8 @@ def lands_before_wall(i, w, t, flight, dyn, walls, grid, gravity, pair_table, fs
     gn, vn = pressed(i, w, t, flight.st, walls, gravity)
     if not (gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]):
         return False
+    if ball(walls, w):
+        return _sleeps_on_ball(i, w, gn, flight, dyn, gravity, fsc[F_LANDING_SPEED], rotation)
     if not holds_now(walls, w, t, gravity):
         return False  # a moving plane pulling away: it hits the sphere (or misses it)
     v_land = fsc[F_LANDING_SPEED]
@@ -799,6 +842,12 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
                                               walls, rec, fsc[F_TC_TIME]):
         enter_plane(i, np.int64(mplane[i]), t, no_end, flight, dyn, walls, gravity, pair_table,
                     fsc, friction, rolling, rotation)
+        return True, False, False, False
+    # a sphere in flight that gravity presses onto a fixed sphere it slides over (it has no
+    # motion on one): a hop, as off a sphere (_hop)
+    if (mstate[i] == MS_FLIGHT and ball(walls, w)
+            and _wall_hop(i, w, t, 0.0, 0.0, 0.0, 0.0, inv_m[i], flight, walls, rec,
+                          fsc[F_TC_TIME])):
         return True, False, False, False
     row, tc_on = tc_row(pair_table[dyn.mat[i], planes_mat[w]], t, dyn.t_last[i], -NEVER, fsc,
                         dyn.row_tc)

@@ -653,3 +653,54 @@ def test_a_triangle_written_twice_keeps_its_rim_and_clusters_are_refused():
     with pytest.raises(InputError) as err:
         parse_scene(text)
     assert err.value.key == "enduring_contact.treatment"
+
+
+POCKET = """
+[scene]
+name = "pocket"
+duration = 0.5
+gravity = {gravity}
+effects = ["gravity", "rotation", "friction"]
+[output]
+frame_interval = 0.01
+[[walls]]
+kind = "plane"
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+material = "steel"
+[[contacts]]
+between = ["steel", "steel"]
+restitution = 0.5
+sliding_friction = 0.3
+"""
+
+
+@pytest.mark.parametrize("tilt", [0.0, 15.0, 30.0])
+def test_a_bead_dropped_into_a_pocket_of_fixed_beads_rests_there(tilt):
+    """Three fixed beads on a floor (a rough base's pocket; gravity tilted by ``tilt`` degrees,
+    a chute's, less than the 37° of the pocket's walls, so that it holds the bead), a bead
+    dropped into it from 0.2 mm: it bounces, falls asleep on the fixed beads
+    ([OURS], docs/walls.md, "Resting on fixed spheres") and stays there, touching them and
+    overlapping none. It used to buzz between them until the collapse guard stopped the run
+    (a 440-bead chute at 0.044 s)."""
+    r, s = 0.001, 0.0021
+    g = 9.81
+    th = math.radians(tilt)
+    text = POCKET.format(gravity=[g * math.sin(th), 0.0, -g * math.cos(th)])
+    centres = np.array([[s / math.sqrt(3.0) * math.cos(a), s / math.sqrt(3.0) * math.sin(a), r]
+                        for a in (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)])
+    for c in centres.tolist():
+        text += (f"[[particles]]\nmaterial = \"steel\"\nradius = {r}\nposition = {c!r}\n"
+                 "fixed = true\n")
+    # dropped from 0.2 mm above where it rests: its rebounds cannot lift it over the rim
+    rest = r + math.sqrt(4.0 * r * r - s * s / 3.0)
+    text += SPHERE.format(r=r, x=0.0, y=0.0, z=rest + 2e-4, u=0.0, v=0.0, w=0.0)
+    _, frames, _, summary = run(text)
+    pos = frames["position"][:, 0]
+    gaps = np.linalg.norm(pos[:, None, :] - centres[None], axis=-1) - 2.0 * r
+    assert gaps.min() > -1e-12
+    assert frames["motion_state"][-1, 0] == 3  # at rest (MS_REST)
+    assert np.ptp(pos[-10:], axis=0).max() == 0.0
+    assert gaps[-1].min() < 1e-9  # on the fixed beads
+    assert pos[-1, 2] > r  # above the floor, in the pocket
+    assert summary.events["land"] >= 1
