@@ -73,6 +73,7 @@ from hsgran.contact.model import (
     resolve,
 )
 from hsgran.events.kinds import EV_HOP
+from hsgran.materials import P_MU_R, P_MU_S
 from hsgran.motion import NEVER
 from hsgran.onplane import END_NONE, MS_FLIGHT, MS_REST
 
@@ -205,14 +206,38 @@ def _wedge_stop(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, ro
 
 
 @njit(inline="always")
-def _both_slow_on_supports(i, j, flight, walls, v_land):
-    """Whether spheres i and j are both on a support (a plane, or asleep on a sphere) and both
-    slower than the landing speed ``v_land`` [m/s]. When such spheres meet they both stop
-    where they are (on a steep incline the plane then sets them moving again) [OURS]: the
-    sphere-against-sphere counterpart of landing, at a cost of at most ½ m v_land² per sphere
-    stopped. As a collision, a slow sphere sliding into a resting one that had just taken a
-    sleeper made a zero-time chain: the collision moved the support, the sleeper stopped it
-    again, and the slider met it again, ever slower."""
+def _can_rest(p, flight, dyn, walls, gravity, pair_table, friction, rolling):
+    """Whether sphere p, on a support, can rest there: asleep or at rest already, or on a
+    plane whose slope its friction and rolling resistance hold (MODEL §5.3, the rest test of
+    hsgran.onplane.plane_segment: |g_t| ≤ min(μ_r, μ_s) g_n; frictionless, a level plane)."""
+    w = flight.mplane[p]
+    if flight.mstate[p] == MS_REST or w < 0:
+        return True
+    nx, ny, nz = wall_normal(walls, w, flight.st[p, 0], flight.st[p, 1], flight.st[p, 2])
+    gn = -(gravity[0] * nx + gravity[1] * ny + gravity[2] * nz)
+    gtx, gty, gtz = gravity[0] + gn * nx, gravity[1] + gn * ny, gravity[2] + gn * nz
+    gts = math.sqrt(gtx * gtx + gty * gty + gtz * gtz)
+    row = pair_table[dyn.mat[p], walls.planes_mat[w]]
+    mu_s = row[P_MU_S] if friction else 0.0
+    mu_r = row[P_MU_R] if rolling else 0.0
+    if mu_s <= 0.0:
+        return gts == 0.0
+    return gts <= min(mu_r, mu_s) * gn
+
+
+@njit
+def _both_slow_on_supports(i, j, flight, dyn, walls, gravity, pair_table, friction, rolling,
+                           v_land):
+    """Whether spheres i and j are both on a support (a plane, or asleep on a sphere), both
+    slower than the landing speed ``v_land`` [m/s], and both can rest there (_can_rest).
+    When such spheres meet they both stop where they are [OURS]: the sphere-against-sphere
+    counterpart of landing, at a cost of at most ½ m v_land² per sphere stopped. As a
+    collision, a slow sphere sliding into a resting one that had just taken a sleeper made a
+    zero-time chain: the collision moved the support, the sleeper stopped it again, and the
+    slider met it again, ever slower. Stopped where it cannot rest (a slope too steep), a
+    sphere moves on from standstill at once: a bead rolling down a chute's floor into one at
+    rest on the rough base was stopped and set rolling again 1000 times at one instant, its
+    hop off the base undone each time; they collide instead."""
     if flight.mstate[i] == MS_FLIGHT or flight.mstate[j] == MS_FLIGHT:
         return False
     # Not on a cylinder: stopped at two places of a curved wall, the spheres are pulled
@@ -227,7 +252,9 @@ def _both_slow_on_supports(i, j, flight, walls, v_land):
     st = flight.st
     vi2 = st[i, 3] * st[i, 3] + st[i, 4] * st[i, 4] + st[i, 5] * st[i, 5]
     vj2 = st[j, 3] * st[j, 3] + st[j, 4] * st[j, 4] + st[j, 5] * st[j, 5]
-    return vi2 <= v_land * v_land and vj2 <= v_land * v_land
+    return (vi2 <= v_land * v_land and vj2 <= v_land * v_land
+            and _can_rest(i, flight, dyn, walls, gravity, pair_table, friction, rolling)
+            and _can_rest(j, flight, dyn, walls, gravity, pair_table, friction, rolling))
 
 
 @njit
@@ -515,8 +542,8 @@ def settle(i, j, nx, ny, nz, t, flight, dyn, walls, grid, gravity, pair_table, f
        (_resting_plane): it lands there first;
     2. one falls asleep on the other (_falls_asleep; a slow support on a plane is brought to
        rest first, and if it cannot rest there, a steep incline, they collide);
-    3. both are on supports and slow (_both_slow_on_supports): both stop, if both can rest
-       there (one on a slope too steep for rest moves on from standstill, and they collide).
+    3. both are on supports, slow, and able to rest there (_both_slow_on_supports): both
+       stop.
 
     Returns (rule, sphere, partner): the rule that applied (SETTLE_*, SETTLE_NONE when the
     pair collides), and the sphere and partner of the event log's landing entry (partner
@@ -551,17 +578,13 @@ def settle(i, j, nx, ny, nz, t, flight, dyn, walls, grid, gravity, pair_table, f
             _fall_asleep(sleeper, other, flight, dyn, rotation)
             counter[sleeper] += 1
             return SETTLE_SLEEP, sleeper, other
-    if _both_slow_on_supports(i, j, flight, walls, v_land):
+    if _both_slow_on_supports(i, j, flight, dyn, walls, gravity, pair_table, friction, rolling,
+                              v_land):
         for p in (i, j):
             if mstate[p] != MS_REST:
                 stop_on_plane(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
                                rolling, rotation)
-        if mstate[i] == MS_REST and mstate[j] == MS_REST:
-            return SETTLE_STOP, i, j
-        # one of them cannot rest on its slope and moves on from standstill: they collide (a
-        # hop where it presses into the other); stopped again and again instead, a bead
-        # rolling down a chute's floor into one at rest on the base did so 1000 times at one
-        # instant
+        return SETTLE_STOP, i, j
     return SETTLE_NONE, -1, 0
 
 
