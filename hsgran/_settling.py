@@ -64,7 +64,6 @@ from hsgran._state import (
     S_V,
 )
 from hsgran.contact.model import (
-    REC_E_N,
     REC_ENERGY_LOST,
     REC_J_N,
     REC_J_T,
@@ -75,7 +74,7 @@ from hsgran.contact.model import (
 from hsgran.events.kinds import EV_HOP
 from hsgran.materials import P_MU_R, P_MU_S
 from hsgran.motion import NEVER
-from hsgran.onplane import END_NONE, MS_FLIGHT, MS_REST
+from hsgran.onplane import END_NONE, MS_FLIGHT, MS_REST, holds_still, load_and_pull
 
 #: Events of one sphere in succession, each less than the TC time after the previous one (or
 #: at the same instant), after which it counts as jammed: in an enduring contact with several
@@ -150,6 +149,13 @@ def _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_sleep, jam_i,
 
 
 @njit(inline="always")
+def _jammed(p, dyn):
+    """Whether sphere p is jammed: more than JAM_EVENTS rapid events (note_rapid) or events
+    without its clock advancing in succession."""
+    return dyn.rapid[p] > JAM_EVENTS or dyn.zstreak[p] > JAM_EVENTS
+
+
+@njit(inline="always")
 def note_rapid(p, t, t_last, rapid, tc):
     """Count sphere p's collisions in succession that come less than the TC time ``tc`` [s]
     after its previous one (jam detection, JAM_EVENTS)."""
@@ -208,21 +214,16 @@ def _wedge_stop(p, t, flight, dyn, walls, gravity, pair_table, fsc, friction, ro
 @njit(inline="always")
 def _can_rest(p, flight, dyn, walls, gravity, pair_table, friction, rolling):
     """Whether sphere p, on a support, can rest there: asleep or at rest already, or on a
-    plane whose slope its friction and rolling resistance hold (MODEL §5.3, the rest test of
-    hsgran.onplane.plane_segment: |g_t| ≤ min(μ_r, μ_s) g_n; frictionless, a level plane)."""
+    plane whose slope its friction and rolling resistance hold (hsgran.onplane.holds_still,
+    the rest test of the on-plane model)."""
     w = flight.mplane[p]
     if flight.mstate[p] == MS_REST or w < 0:
         return True
     nx, ny, nz = wall_normal(walls, w, flight.st[p, 0], flight.st[p, 1], flight.st[p, 2])
-    gn = -(gravity[0] * nx + gravity[1] * ny + gravity[2] * nz)
-    gtx, gty, gtz = gravity[0] + gn * nx, gravity[1] + gn * ny, gravity[2] + gn * nz
-    gts = math.sqrt(gtx * gtx + gty * gty + gtz * gtz)
+    gn, gtx, gty, gtz = load_and_pull(nx, ny, nz, gravity)
     row = pair_table[dyn.mat[p], walls.planes_mat[w]]
-    mu_s = row[P_MU_S] if friction else 0.0
-    mu_r = row[P_MU_R] if rolling else 0.0
-    if mu_s <= 0.0:
-        return gts == 0.0
-    return gts <= min(mu_r, mu_s) * gn
+    return holds_still(math.sqrt(gtx * gtx + gty * gty + gtz * gtz), gn,
+                       row[P_MU_S] if friction else 0.0, row[P_MU_R] if rolling else 0.0)
 
 
 @njit
@@ -260,16 +261,7 @@ def _both_slow_on_supports(i, j, flight, dyn, walls, gravity, pair_table, fricti
 @njit
 def _fall_asleep(a, b, flight, dyn, rotation):
     """Sphere a rests on sphere b from now on: zero velocity, spin and acceleration."""
-    st, acc, mstate = flight.st, flight.acc, flight.mstate
-    mplane, seg_end = flight.mplane, flight.seg_end
-    halt(a, st, dyn.omg, rotation)
-    for k in range(3):
-        acc[a, k] = 0.0
-        if rotation:
-            dyn.alpha[a, k] = 0.0
-    mstate[a] = MS_REST
-    mplane[a] = -2 - b  # the support: sphere b
-    seg_end[a] = NEVER
+    rest_on(a, -2 - b, flight, dyn, rotation)  # the support code of sphere b
 
 
 @njit
@@ -414,6 +406,19 @@ def _after_backed(p, c, t, no_end, flight, dyn, walls, gravity, pair_table, fsc,
 STAGE_HOP = -1
 
 
+@njit(inline="always")
+def _record_hop(rec, jn, lost):
+    """The collision record of a hop (_hop, _wall_hop): normal impulse jn [N s], stage
+    STAGE_HOP, and the energy ``lost`` [J] (negative: a hop adds energy)."""
+    for k in range(rec.shape[0]):
+        rec[k] = math.nan
+    rec[REC_J_N] = jn
+    rec[REC_J_T] = 0.0
+    rec[REC_STAGE] = STAGE_HOP
+    rec[REC_REGIME] = 0
+    rec[REC_ENERGY_LOST] = lost
+
+
 @njit
 def _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, tc):
     """A hop of touching spheres i, j (unit normal n from j to i) that their accelerations
@@ -441,14 +446,7 @@ def _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, tc):
     for k, nk in enumerate((nx, ny, nz)):
         st[i, S_V + k] += inv_mi * jn * nk
         st[j, S_V + k] -= inv_mj * jn * nk
-    for k in range(rec.shape[0]):
-        rec[k] = math.nan
-    rec[REC_J_N] = jn
-    rec[REC_J_T] = 0.0
-    rec[REC_E_N] = math.nan
-    rec[REC_STAGE] = STAGE_HOP
-    rec[REC_REGIME] = 0
-    rec[REC_ENERGY_LOST] = -0.5 * m_eff * (v_hop * v_hop - vn * vn)
+    _record_hop(rec, jn, -0.5 * m_eff * (v_hop * v_hop - vn * vn))
     return True
 
 
@@ -486,14 +484,7 @@ def _wall_hop(i, w, t, ax, ay, az, ci, inv_mi, flight, walls, rec, tc):
     st[i, 4] += scale * (ny + ci * ay)
     st[i, 5] += scale * (nz + ci * az)
     ke1 = st[i, 3] ** 2 + st[i, 4] ** 2 + st[i, 5] ** 2
-    for k in range(rec.shape[0]):
-        rec[k] = math.nan
-    rec[REC_J_N] = (v_hop - vn) / inv_mi
-    rec[REC_J_T] = 0.0
-    rec[REC_E_N] = math.nan
-    rec[REC_STAGE] = STAGE_HOP
-    rec[REC_REGIME] = 0
-    rec[REC_ENERGY_LOST] = -0.5 * (ke1 - ke0) * (1.0 - ci * ci) / inv_mi
+    _record_hop(rec, (v_hop - vn) / inv_mi, -0.5 * (ke1 - ke0) * (1.0 - ci * ci) / inv_mi)
     return True
 
 
@@ -560,13 +551,13 @@ def settle(i, j, nx, ny, nz, t, flight, dyn, walls, grid, gravity, pair_table, f
                              friction, rolling, rotation)
                 counter[p] += 1
                 return SETTLE_PLANE, p, -1 - w
-    rapid, zstreak = dyn.rapid, dyn.zstreak
-    # jammed: the sphere's rapid events, or the pair's zero-time ones (the event's sphere i
+    # jammed: by its own count, or by the pair's zero-time events (the event's sphere i
     # counts them: a sphere rolling from standstill on a chute into a bead at rest on the
     # base, both stopped and it rolling again, at one instant, 1000 times)
-    stuck = zstreak[i] > JAM_EVENTS or zstreak[j] > JAM_EVENTS
+    zstreak = dyn.zstreak
     sleeper = _falls_asleep(i, j, nx, ny, nz, st, mstate, mplane, gravity, v_land,
-                            rapid[i] > JAM_EVENTS or stuck, rapid[j] > JAM_EVENTS or stuck)
+                            _jammed(i, dyn) or zstreak[j] > JAM_EVENTS,
+                            _jammed(j, dyn) or zstreak[i] > JAM_EVENTS)
     if sleeper >= 0:
         other = j if sleeper == i else i
         if mstate[other] != MS_REST:
@@ -758,8 +749,7 @@ def _sleeps_on_ball(i, w, gn, flight, dyn, gravity, v_land, rotation):
     if st[i, 3] ** 2 + st[i, 4] ** 2 + st[i, 5] ** 2 > v_land * v_land:
         return False
     g = math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
-    jammed = dyn.rapid[i] > JAM_EVENTS or dyn.zstreak[i] > JAM_EVENTS
-    if gn < (JAM_SUPPORT_COS if jammed else SUPPORT_COS) * g:
+    if gn < (JAM_SUPPORT_COS if _jammed(i, dyn) else SUPPORT_COS) * g:
         return False
     if flight.mstate[i] != MS_FLIGHT:
         leave_plane(i, flight, dyn, gravity, rotation)
@@ -801,14 +791,14 @@ def lands_before_wall(i, w, t, flight, dyn, walls, grid, gravity, pair_table, fs
     it rests on (_resting_plane; it lands there instead): it stays on a, and the collision
     with w is backed by a (_falls_back, collide_wall)."""
     friction, rolling, rotation = flags[FL_FRICTION], flags[FL_ROLLING], flags[FL_ROTATION]
+    v_land = fsc[F_LANDING_SPEED]
     gn, vn = pressed(i, w, t, flight.st, walls, gravity)
-    if not (gn > 0.0 and -vn <= fsc[F_LANDING_SPEED]):
+    if not (gn > 0.0 and -vn <= v_land):
         return False
     if ball(walls, w):
-        return _sleeps_on_ball(i, w, gn, flight, dyn, gravity, fsc[F_LANDING_SPEED], rotation)
+        return _sleeps_on_ball(i, w, gn, flight, dyn, gravity, v_land, rotation)
     if not holds_now(walls, w, t, gravity):
         return False  # a moving plane pulling away: it hits the sphere (or misses it)
-    v_land = fsc[F_LANDING_SPEED]
     a = np.int64(flight.mplane[i])
     if flight.mstate[i] == MS_FLIGHT:
         a = _resting_plane(i, flight.st, walls, grid, gravity, v_land)

@@ -76,6 +76,24 @@ NEVER = math.inf
 
 
 @njit(inline="always")
+def load_and_pull(nx, ny, nz, g):
+    """(g_n, g_t): gravity's load −g·n [m/s²] on a plane of unit normal n (pointing to the
+    sphere) and its pull along the plane, g_t = g + g_n n (MODEL §5.3)."""
+    gn = -(g[0] * nx + g[1] * ny + g[2] * nz)
+    return gn, g[0] + gn * nx, g[1] + gn * ny, g[2] + gn * nz
+
+
+@njit(inline="always")
+def holds_still(gts, gn, mu_s, mu_r):
+    """Whether a plane holds a sphere at rest against the pull |g_t| = ``gts`` along it under
+    the load ``gn`` [m/s²] (MODEL §5.3): the rolling torque against the slope and friction at
+    the contact point, |g_t| ≤ min(μ_r, μ_s) g_n; frictionless, only a level plane."""
+    if mu_s <= 0.0:
+        return gts == 0.0
+    return gts <= min(mu_r, mu_s) * gn
+
+
+@njit(inline="always")
 def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
@@ -107,10 +125,7 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, spee
         MODEL §5.1, §5.3.
     """
     nx, ny, nz = n[0], n[1], n[2]
-    gn = -(g[0] * nx + g[1] * ny + g[2] * nz)
-    gtx = g[0] + gn * nx
-    gty = g[1] + gn * ny
-    gtz = g[2] + gn * nz
+    gn, gtx, gty, gtz = load_and_pull(nx, ny, nz, g)
     k = inertia
     if snap == END_SLIP:
         # rolling from now on: ω's rolling part follows v exactly (keep the spin about n)
@@ -163,7 +178,7 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, spee
     if vs > 0.0:
         dx, dy, dz = v[0] / vs, v[1] / vs, v[2] / vs
     else:
-        if gts <= min(mu_r, mu_s) * gn:
+        if holds_still(gts, gn, mu_s, mu_r):
             # at rest: the rolling torque holds the sphere against the slope, and friction the
             # contact point (exact zero state)
             v[0] = 0.0

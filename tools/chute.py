@@ -3,10 +3,10 @@
 The scene is scenarios/chute.toml's: 400 glass beads (d = 2 mm, e = 0.5, μ = 0.3) in a box
 periodic along the flow (x, 30 mm) and across it (y, 10 mm), over a base of 40 fixed glass
 beads on the floor, under gravity tilted by θ from the vertical towards +x. For each
-inclination the tool prints the free beads' mean velocity along the slope in windows of
+inclination the tool prints the beads' mean velocity along the slope in windows of
 simulated time, how many are at rest at the end, and what the run did (events, wall time, or
 the collapse guard); and, for one inclination (``--profile``), the velocity profile: the mean
-v_x of the free beads in slabs of one bead diameter, averaged over the frames of the last half.
+v_x of the beads in slabs of one bead diameter, averaged over the frames of the last half.
 
 A flow is called **steady** when its mean velocity changes by less than ``--steady`` (10 %)
 between the last two windows and is above 1 mm/s, **stopped** when it is below 1 mm/s, and
@@ -44,7 +44,6 @@ def run_one(args) -> dict:
     scene = load_scene(SCENE, overrides={
         "scene.gravity": [9.81 * math.sin(th), 0.0, -9.81 * math.cos(th)],
         "scene.duration": seconds})
-    free = np.ones(scene.n, bool)  # the fixed beads are walls (parts), not particles
     sim = Simulation(scene)
     frames = {"t": [], "vx": [], "z": [], "rest": []}
 
@@ -63,7 +62,7 @@ def run_one(args) -> dict:
         events = sim.run(observers=[Keep()]).events
     except SimulationError as err:  # the collapse guard: reported, not hidden
         guard = (sim.time, str(err))
-    return {"angle": angle, "free": free, "wall": time.perf_counter() - wall, "guard": guard,
+    return {"angle": angle, "wall": time.perf_counter() - wall, "guard": guard,
             "events": events, **{k: np.array(v) for k, v in frames.items()}}
 
 
@@ -83,14 +82,13 @@ def main() -> None:
     with ProcessPoolExecutor(max_workers=a.jobs) as pool:
         results = list(pool.map(run_one, [(th, a.seconds) for th in angles]))
     edges = np.linspace(0.0, a.seconds, a.windows + 1)
-    print("theta  mean v_x of the free beads per window [m/s]" + " " * 8
+    print("theta  mean v_x of the beads per window [m/s]" + " " * 13
           + "at rest  flow          wall [s]  events")
     for r in results:
-        free = r["free"]
         means = []
         for lo, hi in itertools.pairwise(edges):
             sel = (r["t"] > lo) & (r["t"] <= hi + 1e-12)
-            means.append(r["vx"][sel][:, free].mean() if sel.any() else math.nan)
+            means.append(r["vx"][sel].mean() if sel.any() else math.nan)
         last, before = means[-1], means[-2]
         if r["guard"]:
             flow = f"guard at {r['guard'][0]:.4f} s"
@@ -108,8 +106,8 @@ def main() -> None:
             if not half.any():
                 print(f"  profile at {a.profile:g} deg: no frames after {0.5 * a.seconds:g} s")
                 continue
-            z = r["z"][half][:, free].ravel()
-            vx = r["vx"][half][:, free].ravel()
+            z = r["z"][half].ravel()
+            vx = r["vx"][half].ravel()
             slab = np.floor(z / D).astype(int)
             print(f"  profile at {a.profile:g} deg (frames from {0.5 * a.seconds:g} s):")
             for k in range(slab.max() + 1):
