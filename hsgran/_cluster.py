@@ -47,14 +47,20 @@ from hsgran._flight import (
     halt,
     leave_plane,
     min_image,
+    moving,
+    set_wall_velocity,
     state_at,
+    wall_gap,
 )
 from hsgran._jit import njit
-from hsgran._predict import cell_heads, reschedule_fn
+from hsgran._predict import cell_heads, near_wall, near_walls, reschedule_fn
+from hsgran._riding import moving_gap
+from hsgran._settling import WEDGE_EVENTS
 from hsgran._state import (
     F_CLUSTER_LOSS,
     F_LANDING_SPEED,
     FL_ADHESION,
+    FL_CLUSTERS,
     FL_FRICTION,
     FL_PLASTICITY,
     FL_ROLLING,
@@ -82,14 +88,39 @@ from hsgran.contact.model import (
     resolve,
 )
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S
-from hsgran.motion import NEVER, plane_gap
+from hsgran.motion import NEVER
 from hsgran.onplane import END_NONE, END_RESOLVE, MS_FLIGHT, MS_REST, MS_SUPPORTED
+from hsgran.wallspec import BL_RADIUS, CY_RADIUS, CY_SIDE, WK_BALL, WK_CYLINDER, WK_FACE, WK_PLANE
 
 #: A segment of constant accelerations lasts until a contact between spheres has moved
 #: tangentially by this fraction of σ [-]: the contact normal then turns by 1e-4 rad and the
 #: spheres, which move along the tangent, lift off each other by 5e-9 σ; the cluster is then
 #: solved again from the new normals.
 CURVATURE_REL = 1e-4
+#: Inside a cylinder a sphere moving along the tangent of its contact sinks into the wall,
+#: by d²/2(ρ − r) after a distance d: a segment there lasts until it could have sunk by this
+#: fraction of its radius [-], what the prediction takes as touching (hsgran._flight
+#: PLANE_TOUCHING_REL), and the next solve puts it back on the surface (:func:`gather`).
+CONCAVE_SINK_REL = 1e-10
+#: A sphere whose collisions have not advanced the clock this many times in a row
+#: (``zstreak``) is in a zero-time sequence the pairwise rules (``treatment = "pairwise"``)
+#: have not ended: its next collision is solved as a cluster, and so is every collision of a
+#: sphere in constrained motion after it (:func:`hands_over`). Twice the streak at which the
+#: last pairwise rule acts (the wedge stop, hsgran._settling.WEDGE_EVENTS, after the jam rule's
+#: JAM_EVENTS), so that every rule has had its turn; a quarter of the collapse guard's count
+#: (hsgran._flight.MAX_ZERO_TIME_EVENTS). (At 100, before the wedge stop, small pours that
+#: the wedge stop settles in seconds were handed over and ran for minutes.)
+HAND_OVER_STREAK = 2 * WEDGE_EVENTS
+#: In a cluster the pairwise rules hand over, spheres in flight or on a plane join it up to
+#: this many contacts from the event's spheres; those further away are its boundary, moving
+#: as before under gravity or on their plane (as are those beyond the scratch arrays' room).
+#: A boundary sphere that then closes on a body meets it: that collision is solved as a
+#: cluster with it. Spheres in constrained motion always join (their accelerations hang on
+#: the bodies': one that a solve without it brought to rest would be met at once, again and
+#: again). One contact: the spheres of a zero-time sequence and those touching them, not the
+#: whole moving bed of a dense flow (with all, a chute's bed of 355 spheres was solved again
+#: and again: 23,000 cluster events took 317 s).
+HAND_OVER_REACH = 1
 #: Longest segment [s]: even a cluster whose contacts do not slide is solved again this often,
 #: which bounds what the solver's tolerance can add up to (slack × MAX_SEGMENT = 1e-13 m of
 #: overlap with the default landing speed).
@@ -116,8 +147,9 @@ REST_ACC_REL = 1e-6
 #: An impact (faster than the landing speed) moves the resting spheres up to this many contacts
 #: away from the event's spheres (a row of five, Newton's cradle, in full); resting spheres
 #: further away are immovable. A slower meeting moves none: a pile at rest carries it
-#: (docs/enduring-contact.md). Moving spheres are always part of the cluster: held as a
-#: boundary moving as before, they could squeeze a body between them and a wall.
+#: (docs/enduring-contact.md). With the cluster treatment moving spheres are always part of
+#: the cluster: held as a boundary moving as before, they could squeeze a body between them
+#: and a wall (see HAND_OVER_REACH for the pairwise rules' clusters).
 REST_DEPTH = 4
 #: Target of a contact left out of the force solve (it separates): no force can act.
 NO_CONTACT = -1e300
@@ -192,15 +224,19 @@ def _boundary_motion(q, c, nx, ny, nz, t, flight, dyn, clus, rotation):
 # long: one breadth-first walk over the touching bodies; its cell scan, plane scan and the
 # three kinds of partner (a body, a new body, the boundary) share the walk's state
 @njit
-def gather(s1, s2, t, fast, flight, dyn, walls, space, grid, clus, rotation):
-    """The cluster of sphere s1 (and s2, or −1): every body touching them, and every moving
-    sphere touching those, breadth first; in an impact (``fast``: faster than the landing
-    speed) also the resting spheres up to REST_DEPTH contacts away, through which its impulse
-    travels. Other spheres at rest and planes are immovable partners, moving spheres beyond
-    the room of the scratch arrays the cluster's boundary. Returns (bodies, contacts); the
-    bodies are advanced to t."""
+def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotation):
+    """The cluster of sphere s1 (and s2, or −1): every body touching them, and every sphere in
+    constrained motion touching those, and every other moving one up to ``reach`` contacts
+    away, breadth first; in an impact
+    (``fast``: faster than the landing speed) also the resting spheres up to REST_DEPTH
+    contacts away, through which its impulse travels. Other spheres at rest are immovable
+    partners, moving spheres beyond ``reach`` or the room of the scratch arrays the
+    cluster's boundary. Walls are immovable partners
+    moving as they do at t (a moving plane at its velocity then, a turning cylinder's surface
+    with it). Returns (bodies, contacts, whether a moving plane is among the partners,
+    whether a moving sphere is); the bodies are advanced to t."""
     st, acc, mstate, mat = flight.st, flight.acc, flight.mstate, dyn.mat
-    planes_p, planes_n, planes_mat = walls.planes_p, walls.planes_n, walls.planes_mat
+    planes_n, planes_mat = walls.planes_n, walls.planes_mat
     box_len, periodic, nxt = space.box_len, space.periodic, grid.nxt
     loc = clus.cl_loc
     max_b = clus.cl_body.shape[0]
@@ -209,16 +245,28 @@ def gather(s1, s2, t, fast, flight, dyn, walls, space, grid, clus, rotation):
     if s2 >= 0:
         nb = _add_body(s2, 0, t, flight, dyn, clus, nb, rotation)
     nc = 0
+    driven = False
+    left = False
     p = 0
     while p < nb:
         s = clus.cl_body[p]
         rs = st[s, S_R]
-        # (the scene refuses clusters with walls other than fixed planes: scene._check_moving)
-        for w in range(planes_p.shape[0]):
-            gap = plane_gap(st[s, 0], st[s, 1], st[s, 2], rs, planes_p, planes_n, w)
+        n_near, first_part = near_walls(s, walls, grid)
+        for k in range(n_near):
+            w = near_wall(k, walls, grid, first_part)
+            if moving(walls, w):
+                gap, _ = moving_gap(st[s, 0], st[s, 1], st[s, 2], rs, walls, w, t)
+                set_wall_velocity(walls, w, t)
+            else:  # (its row's normal and velocity then those at its contact with s)
+                gap = wall_gap(s, w, st, walls)
             if gap <= TOUCH_REL * rs and nc < max_c:
+                driven = driven or moving(walls, w)
+                if gap < 0.0 and _concave(walls, w):
+                    _to_surface(s, w, gap, st, walls)
                 nc = _add_contact(clus, nc, p, -1, -1 - w, planes_mat[w], planes_n[w, 0],
-                                  planes_n[w, 1], planes_n[w, 2], 0.0)
+                                  planes_n[w, 1], planes_n[w, 2],
+                                  walls.planes_geo[w, BL_RADIUS]
+                                  if walls.planes_kind[w] == WK_BALL else 0.0)
                 for k in range(3):
                     clus.ck_vb[nc - 1, k] = walls.planes_vel[w, k]
         for h in range(cell_heads(s, grid, space)):
@@ -234,8 +282,10 @@ def gather(s1, s2, t, fast, flight, dyn, walls, space, grid, clus, rotation):
                     d = math.sqrt(dx * dx + dy * dy + dz * dz)
                     if d - sigma <= TOUCH_REL * sigma and nc < max_c:
                         nx, ny, nz = dx / d, dy / d, dz / d
-                        if (lq < 0 and nb < max_b and (mstate[q] != MS_REST or (
-                                fast and clus.cl_depth[p] < REST_DEPTH))):
+                        if (lq < 0 and nb < max_b and (
+                                mstate[q] == MS_SUPPORTED
+                                or (mstate[q] != MS_REST and clus.cl_depth[p] < reach)
+                                or (fast and clus.cl_depth[p] < REST_DEPTH))):
                             lq = nb
                             nb = _add_body(q, clus.cl_depth[p] + 1, t, flight, dyn,
                                            clus, nb, rotation)
@@ -247,9 +297,25 @@ def gather(s1, s2, t, fast, flight, dyn, walls, space, grid, clus, rotation):
                                               st[q, S_R])
                             _boundary_motion(q, nc - 1, nx, ny, nz, t, flight, dyn,
                                              clus, rotation)
+                            left = left or mstate[q] != MS_REST
                 q = np.int64(nxt[q])
         p += 1
-    return nb, nc
+    return nb, nc, driven, left
+
+
+@njit(inline="always")
+def _concave(walls, w):
+    """Whether wall w is the inside of a cylinder."""
+    return walls.planes_kind[w] == WK_CYLINDER and walls.planes_cyl[w, CY_SIDE] > 0.0
+
+
+@njit(inline="always")
+def _to_surface(s, w, gap, st, walls):
+    """Put sphere s, sunk into concave wall w by −gap [m] (at most CONCAVE_SINK_REL of its
+    radius over a segment, and a rounding), back on its surface, along the normal in its
+    row."""
+    for k in range(3):
+        st[s, k] -= gap * walls.planes_n[w, k]
 
 
 @njit
@@ -354,11 +420,34 @@ def _room_time(room, v, a):
     return 2.0 * room / (v + math.sqrt(v * v + 2.0 * a * room))
 
 
+@njit(inline="always")
+def _room(c, clus, walls):
+    """How far contact c may move along its tangent before its cluster is solved again [m]:
+    CURVATURE_REL × the sum of its radii of curvature (a sphere, a fixed sphere, a corner, an
+    edge, a cylinder from outside), the distance that sinks a sphere by CONCAVE_SINK_REL of
+    its radius inside a cylinder, and no limit on a flat wall (inf)."""
+    r = clus.cl_rad[clus.ck_a[c]]
+    q = clus.ck_q[c]
+    if clus.ck_b[c] >= 0 or q >= 0:
+        return CURVATURE_REL * (r + clus.ck_rb[c])
+    w = -1 - q
+    kind = walls.planes_kind[w]
+    if kind == WK_BALL:
+        return CURVATURE_REL * (r + walls.planes_geo[w, BL_RADIUS])
+    if kind == WK_CYLINDER:
+        rho = walls.planes_cyl[w, CY_RADIUS]
+        if walls.planes_cyl[w, CY_SIDE] > 0.0:
+            return math.sqrt(2.0 * max(rho - r, 0.0) * CONCAVE_SINK_REL * r)
+        return CURVATURE_REL * (r + rho)
+    return math.inf
+
+
 @njit
-def _segment_time(nc, clus, h, solved, t):
-    """Length of a segment of constant accelerations [s]: until a contact between spheres
-    could have moved along its tangent by CURVATURE_REL σ (the normal then turns by 1e-4 rad,
-    and the spheres, which move along the tangent, lift off each other by 5e-9 σ), at most
+def _segment_time(nc, clus, h, solved, t, walls):
+    """Length of a segment of constant accelerations [s]: until a contact could have moved
+    along its tangent by its :func:`_room` (between spheres CURVATURE_REL σ: the normal then
+    turns by 1e-4 rad, and the spheres, which move along the tangent, lift off each other by
+    5e-9 σ), at most
     ``h`` (MAX_SEGMENT for the step), at least MIN_SEGMENT_REL × max(1 s, t). Before the
     step's solve (``solved`` False) from the relative velocities only: the step's length h;
     after it, with the relative accelerations the solve gave too: the segment's length, at
@@ -366,11 +455,13 @@ def _segment_time(nc, clus, h, solved, t):
     step, so over any part of it too)."""
     tau = h
     for c in range(nc):
-        if clus.ck_tgt[c] == NO_CONTACT or clus.ck_rb[c] == 0.0:
-            continue  # separating, or flat
+        if clus.ck_tgt[c] == NO_CONTACT:
+            continue  # separating
+        room = _room(c, clus, walls)
+        if room == math.inf:
+            continue  # flat
         a = clus.ck_a[c]
         b = clus.ck_b[c]
-        room = CURVATURE_REL * (clus.cl_rad[a] + clus.ck_rb[c])
         v2 = a2 = 0.0
         for k in range(3):
             v2 += (clus.cl_v[a, k] - (clus.cl_v[b, k] if b >= 0 else clus.ck_vb[c, k])) ** 2
@@ -656,25 +747,27 @@ def _support(b, nc, clus):
 
 
 @njit
-def resolve_without(s, t, flight, walls, space, grid, sched, clus, isc):
-    """Sphere s leaves the system at time t [s] (hsgran._exchange): every sphere at rest or in
-    constrained motion that touches it is solved again at once, without it."""
-    _wake(s, t, flight, walls, space, grid, sched, clus, isc, True)
+def resolve_without(s, t, flight, walls, space, grid, sched, clus, isc, rest):
+    """Sphere s leaves the system at time t [s] (hsgran._exchange): every sphere in
+    constrained motion that touches it, and with ``rest`` every one at rest (the cluster
+    treatment's; the pairwise rules wake theirs), is solved again at once, without it."""
+    _wake(s, t, flight, walls, space, grid, sched, clus, isc, True, rest)
 
 
 @njit
-def _wake(s, t, flight, walls, space, grid, sched, clus, isc, supported=False):
+def _wake(s, t, flight, walls, space, grid, sched, clus, isc, supported=False, rest=True):
     """Sphere s, at rest before the solve, moves: the resting spheres it touches (outside the
     cluster) are solved again at once, since s may have carried them. With ``supported``
     (s leaves the system, hsgran._exchange) the spheres in constrained motion that touch it are
-    solved again too."""
+    solved again too; without ``rest`` only those."""
     st, mstate = flight.st, flight.mstate
     box_len, periodic = space.box_len, space.periodic
     woken = 0  # (re-predicted after the walk: a prediction overwrites grid.heads)
     for h in range(cell_heads(s, grid, space)):
         q = np.int64(grid.heads[h])
         while q >= 0:
-            if q != s and (mstate[q] == MS_REST or (supported and mstate[q] == MS_SUPPORTED)) \
+            if q != s and ((rest and mstate[q] == MS_REST)
+                           or (supported and mstate[q] == MS_SUPPORTED)) \
                     and clus.cl_loc[q] < 0 and flight.seg_code[q] != END_RESOLVE:
                 dx = min_image(st[s, 0] - st[q, 0], 0, box_len, periodic)
                 dy = min_image(st[s, 1] - st[q, 1], 1, box_len, periodic)
@@ -724,7 +817,9 @@ def _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, 
             mplane[s] = code
             flight.seg_end[s] = NEVER
             flight.seg_code[s] = END_NONE
-        elif count == 1 and plane >= 0:  # on one plane only: the paper's plate (MODEL §5.3)
+        elif count == 1 and plane >= 0 and (walls.planes_kind[plane] == WK_PLANE
+                                             or walls.planes_kind[plane] == WK_FACE):
+            # on one plane (or face) only: the paper's plate (MODEL §5.3)
             leave_plane(s, flight, dyn, gravity, rotation)
             enter_plane(s, np.int64(plane), t, np.int64(END_NONE), flight, dyn, walls, gravity,
                         pair_table, fsc, friction, rolling, rotation)
@@ -752,15 +847,17 @@ def _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, 
 
 @njit
 def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
-           rec, flags):
+           rec, flags, final):
     """Impulses, forces and motion states of a gathered cluster (see the module); the impulse
     of contact ``seed`` (or −1) goes to ``rec`` for the event log. Returns the energy the
-    cluster took [J] (the impulses' loss and what the spheres put to rest gave up)."""
+    cluster took [J] (the impulses' loss and what the spheres put to rest gave up); unless
+    ``final``, NaN, with nothing written back, where the impulses or the step stop short of
+    the slack (the caller grows the cluster: see :func:`_grown`)."""
     rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
     e0 = _kinetic(nb, clus, rotation)
     _impact_setup(nc, clus, pair_table, dyn.mat, rec, fsc, flags)
-    sweeps, _ = _solve_cluster(nc, clus, clus.cl_v, clus.cl_w, clus.ck_vb, rotation, friction,
-                               rolling, SOLVE_TOL_REL * space.slack[0])
+    sweeps, worst = _solve_cluster(nc, clus, clus.cl_v, clus.cl_w, clus.ck_vb, rotation,
+                                   friction, rolling, SOLVE_TOL_REL * space.slack[0])
     for k in range(rec.shape[0]):
         rec[k] = math.nan
     rec[REC_J_N] = clus.ck_pn[seed] if seed >= 0 else 0.0
@@ -770,17 +867,19 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     rec[REC_REGIME] = nb
     loss = e0 - _kinetic(nb, clus, rotation)
     _count(isc, sweeps, nc, False)
-    h = _segment_time(nc, clus, MAX_SEGMENT, False, t)
+    h = _segment_time(nc, clus, MAX_SEGMENT, False, t, walls)
     _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation, friction,
                 rolling)
     solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling)
     _rest_candidates(nb, nc, clus, fsc, space.gravity)
     if solved and _hold_rests(nb, nc, clus):
         solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling)
+    if not final and (not solved or worst > space.slack[0]):
+        return math.nan
     if solved:
         _warm_store(nb, nc, h, clus)
     _accelerations(nb, h, clus)
-    tau = _segment_time(nc, clus, h, True, t)
+    tau = _segment_time(nc, clus, h, True, t, walls)
     if tau <= MIN_SEGMENT_REL * max(1.0, t):
         isc[I_SHORT] += 1
     loss += _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, isc,
@@ -798,6 +897,49 @@ def _seed_contact(nc, clus, j, w):
                                                                       clus.ck_q[c] == -1 - w)):
             return c
     return -1
+
+
+@njit(inline="always")
+def _reach(flags):
+    """How many contacts away from the event's spheres moving spheres join a cluster: all
+    with the cluster treatment, HAND_OVER_REACH with the pairwise rules."""
+    return np.int64(1 << 30) if flags[FL_CLUSTERS] else np.int64(HAND_OVER_REACH)
+
+
+@njit(inline="always")
+def hands_over(i, j, flight, dyn, flags):
+    """Whether the collision of sphere i with sphere j (or a wall, j < 0) is solved as a
+    cluster: always with ``treatment = "clusters"``; with the pairwise rules, where either
+    sphere is in constrained motion or in a zero-time sequence of HAND_OVER_STREAK
+    collisions (the last resort before the collapse guard)."""
+    if flags[FL_CLUSTERS]:
+        return True
+    mstate, zstreak = flight.mstate, dyn.zstreak
+    if mstate[i] == MS_SUPPORTED or zstreak[i] >= HAND_OVER_STREAK:
+        return True
+    return j >= 0 and (mstate[j] == MS_SUPPORTED or zstreak[j] >= HAND_OVER_STREAK)
+
+
+@njit
+def _grown(i, j, w, t, fast, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
+           rec, flags):
+    """Gather and solve the cluster of sphere i (and sphere j ≥ 0 or wall w) at time t [s];
+    where the solve stops short of the slack while moving spheres were left out as its
+    boundary (HAND_OVER_REACH), gather it again reaching twice as far and solve that (a
+    boundary sphere pressing a body against fixed walls can leave it no motion that
+    approaches nothing). Returns the energy taken [J]."""
+    reach = _reach(flags)
+    while True:
+        nb, nc, _, left = gather(i, j, t, fast, reach, flight, dyn, walls, space, grid, clus,
+                                 flags[FL_ROTATION])
+        final = not left or nb >= clus.cl_body.shape[0]
+        seed = _seed_contact(nc, clus, j, w) if (j >= 0 or w >= 0) else -1
+        loss = _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc,
+                      pair_table, fsc, rec, flags, final)
+        release(nb, clus)
+        if loss == loss:  # (not NaN: solved, and written back)
+            return loss
+        reach *= 2
 
 
 @njit
@@ -819,16 +961,20 @@ def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, 
     else:
         un = (st[i, 3] * walls.planes_n[w, 0] + st[i, 4] * walls.planes_n[w, 1]
               + st[i, 5] * walls.planes_n[w, 2])
-    nb, nc = gather(i, j, t, un < -v_land, flight, dyn, walls, space, grid, clus,
-                    flags[FL_ROTATION])
+    fast = un < -v_land
+    nb, nc, driven, _ = gather(i, j, t, fast, _reach(flags), flight, dyn, walls, space,
+                                  grid, clus, flags[FL_ROTATION])
     if (nc == 1 and nb == (2 if j >= 0 else 1) and mstate[i] == MS_FLIGHT
-            and (j < 0 or mstate[j] == MS_FLIGHT)):
+            and (j < 0 or mstate[j] == MS_FLIGHT)) or (
+            driven and not flags[FL_CLUSTERS] and mstate[i] != MS_SUPPORTED
+            and (j < 0 or mstate[j] != MS_SUPPORTED)):
+        # a binary collision; or a hand-over (:func:`hands_over`) beside a moving plane,
+        # which the treatment takes only as it moves now: left to the pairwise rules
         release(nb, clus)
         return CL_ISOLATED
-    seed = _seed_contact(nc, clus, j, w)
-    _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
-           rec, flags)
     release(nb, clus)
+    _grown(i, j, w, t, fast, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
+           rec, flags)
     return CL_SOLVED
 
 
@@ -837,11 +983,8 @@ def cluster_resolve(i, t, flight, dyn, walls, space, grid, sched, clus, isc, pai
                     rec, flags):
     """Sphere i's segment has ended (or a support of it moved): solve its cluster again at
     time t [s]. Returns the energy taken [J]."""
-    nb, nc = gather(i, -1, t, False, flight, dyn, walls, space, grid, clus, flags[FL_ROTATION])
-    loss = _solve(nb, nc, -1, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table,
-                  fsc, rec, flags)
-    release(nb, clus)
-    return loss
+    return _grown(i, -1, -1, t, False, flight, dyn, walls, space, grid, sched, clus, isc,
+                  pair_table, fsc, rec, flags)
 
 
 def slack(landing_speed: float) -> float:

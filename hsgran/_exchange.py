@@ -54,9 +54,9 @@ def remove_sphere(i, t, flight, dyn, walls, space, grid, sched, clus, isc, fsc, 
     The caller has advanced its state to t (and logged it, with its velocity). Then: the
     energy it carries out is added to ``fsc[F_EXITED]``; it leaves the cell lists and stops
     where it is; with gravity the spheres asleep on it fall (hsgran._settling.wake_sleepers)
-    and, with clusters, the spheres resting on it or moving in contact with it are solved again
-    without it (hsgran._cluster.resolve_without); its counter moves on (every pair event
-    predicted with it is stale), and it leaves the calendar, marked absent.
+    and the spheres moving in contact with it (and, with clusters, those resting on it) are
+    solved again without it (hsgran._cluster.resolve_without); its counter moves on (every
+    pair event predicted with it is stale), and it leaves the calendar, marked absent.
     """
     rotation = flags[FL_ROTATION]
     st, acc, mstate = flight.st, flight.acc, flight.mstate
@@ -75,8 +75,7 @@ def remove_sphere(i, t, flight, dyn, walls, space, grid, sched, clus, isc, fsc, 
         # (the walks below find its neighbours from its cell, and the touching ones from its
         # position, which stays)
         wake_sleepers(i, t, flight, dyn, walls, space, grid, sched, isc, grav_on, rotation)
-        if flags[FL_CLUSTERS]:
-            resolve_without(i, t, flight, walls, space, grid, sched, clus, isc)
+        resolve_without(i, t, flight, walls, space, grid, sched, clus, isc, flags[FL_CLUSTERS])
         mstate[i] = MS_FLIGHT
         flight.mplane[i] = -1
         flight.seg_end[i] = NEVER

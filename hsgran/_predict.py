@@ -152,6 +152,35 @@ def held_apart(dx, dy, dz, dvx, dvy, dvz, dax, day, daz, sigma, slack, horizon):
 
 
 @njit(inline="always")
+def held_by_wall(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, slack, horizon):
+    """Whether a supported sphere (hsgran._cluster) of radius r [m] at (x, y, z) [m] with
+    velocity (u, v, w_) [m/s] and acceleration (gx, gy, gz) [m/s²] touches wall w, a fixed
+    sphere, a corner, an edge or a cylinder, with a normal velocity that stays above
+    −``slack`` [m/s] for ``horizon`` [s]: then it does not meet it within them. A convex wall
+    (a sphere, a corner, an edge, a cylinder from outside) curves away from the sphere's
+    path, as a partner sphere does (:func:`held_apart`); inside a cylinder the path sinks
+    into the wall by at most what the segment's length allows
+    (hsgran._cluster.CONCAVE_SINK_REL), which the next solve takes back."""
+    p = walls.planes_p
+    if walls.planes_kind[w] == WK_BALL:
+        return held_apart(x - p[w, 0], y - p[w, 1], z - p[w, 2], u, v, w_, gx, gy, gz,
+                          r + walls.planes_geo[w, BL_RADIUS], slack, horizon)
+    cyl = walls.planes_cyl
+    qx, qy, qz = axis_offset(x, y, z, walls, w)
+    ux, uy, uz = across_axis(u, v, w_, walls, w)
+    ax, ay, az = across_axis(gx, gy, gz, walls, w)
+    if cyl[w, CY_SIDE] < 0.0:  # from outside, or an edge
+        return held_apart(qx, qy, qz, ux, uy, uz, ax, ay, az, r + cyl[w, CY_RADIUS], slack,
+                          horizon)
+    d = max((qx * qx + qy * qy + qz * qz) ** 0.5, 1e-300)
+    if cyl[w, CY_RADIUS] - d - r > TOUCH_REL * r:
+        return False
+    vn = -(qx * ux + qy * uy + qz * uz) / d  # the normal points to the axis
+    an = -(qx * ax + qy * ay + qz * az) / d
+    return vn >= -slack and vn + min(an, 0.0) * horizon >= -slack
+
+
+@njit(inline="always")
 def cell_heads(s, grid, space):
     """Write the list heads of the cells around sphere s's (those that are not empty) into
     ``grid.heads`` and return how many (for cold callers that walk its neighbours; positions
@@ -289,6 +318,10 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
         nz = planes_n[w, 2]
         wkind = walls.planes_kind[w]
         if wkind != WK_PLANE and wkind != WK_FACE:
+            if supported and not moving(walls, w) and held_by_wall(
+                    xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], ri, walls, w, space.slack[0],
+                    seg_end[i] - t_now):
+                continue  # held by the wall: no contact within the segment
             tau = other_wall_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], ri, walls, w,
                                   t_now, best)
             if tau < best:

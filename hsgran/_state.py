@@ -62,7 +62,7 @@ Walls = namedtuple("Walls", "planes_p planes_n planes_mat planes_vel planes_omg 
 #: Gravity [m/s²], box lengths [m] (periodic axes) and which axes are periodic; ``slack``: a
 #: touching contact of a sphere in constrained motion (MS_SUPPORTED, hsgran._cluster) whose
 #: normal velocity stays above −slack[0] [m/s] until its segment ends is no contact event (the
-#: cluster solver's tolerance, not an approach; 0 without clusters).
+#: cluster solver's tolerance, not an approach; 0 without gravity).
 Space = namedtuple("Space", "gravity box_len periodic slack")
 #: The cell grid (hsgran.events.grid): origin [m], cell size [m], cells per axis, each sphere's
 #: cell, the linked lists (``head``, ``nxt``, ``prv``), and scratch space: 27 list heads and
@@ -253,7 +253,9 @@ class Sizes:
     row: int  #: length of a pair-table row (hsgran.materials P_*)
     frames: int  #: frames in the frame buffer
     log: int  #: entries in the event-log buffer
-    clusters: bool = False  #: contacts are solved as clusters (scratch for them)
+    #: contacts may be solved as clusters (scratch for them): with gravity, in either
+    #: treatment (the pairwise rules' last resort, hsgran._cluster.hands_over)
+    clusters: bool = False
     observables: bool = False  #: stress and wall impulses are summed (hsgran._observe)
     outlets: int = 0  #: outlets
     lines: int = 0  #: rows of the faces' outlines and holes (hsgran.facets)
@@ -277,7 +279,7 @@ class Sizes:
             "frames": self.frames, "log": self.log,
             "fr": self.frames if r else 1,  # spin frames: with rotation only
             "nr": n if r else 1,
-            # cluster scratch: bodies and contacts (with clusters only)
+            # cluster scratch: bodies and contacts (with gravity only)
             "cb": min(n, MAX_CLUSTER_BODIES) if self.clusters else 1,
             "ck": CONTACTS_PER_BODY * min(n, MAX_CLUSTER_BODIES) if self.clusters else 1,
             "cn": n if self.clusters else 1,

@@ -77,8 +77,10 @@ EVENTS_PER_CALL = 200_000
 #: ``present``, the energy carried out and brought in, ``F_EXITED`` and ``F_ENTERED``, and the
 #: inflows' progress ``inflow_state``; 12: the finite walls and fixed spheres, ``planes_geo``
 #: and ``face_lines``, and the edges' column ``CY_FINITE`` of ``planes_cyl``; 13: the count
-#: of walls every prediction looks at ``n_global``, in place of their rows).
-CHECKPOINT_VERSION = 13
+#: of walls every prediction looks at ``n_global``, in place of their rows; 14: the cluster
+#: solves' warm-start forces under gravity with either treatment, since the pairwise rules
+#: hand zero-time sequences over to cluster solves).
+CHECKPOINT_VERSION = 14
 
 
 class SimulationError(HsgranError):
@@ -410,7 +412,7 @@ class Simulation:
                       frames=frame_buffer or max(1, min(FRAME_BUFFER_MAX,
                                                         FRAME_BUFFER_BYTES // per_frame)),
                       log=LOG_BUFFER if self.log_events else 1,
-                      clusters=bool(self.flags[es.FL_CLUSTERS]),
+                      clusters=bool(eff.gravity),
                       observables=bool(scene.observables), outlets=len(scene.outlets),
                       lines=sum(len(q.lines) for q in scene.parts),
                       part_items=len(part_items),
@@ -424,7 +426,7 @@ class Simulation:
         a["n_global"][0] = n_global
         if len(part_items):
             a["part_start"][:], a["part_items"][:] = part_start, part_items
-        if self.flags[es.FL_CLUSTERS]:
+        if eff.gravity:  # (cluster solves: the treatment's, or the pairwise rules' last resort)
             a["slack"][0] = slack(scene.effective_landing_speed)
         # one pending event per sphere, entry n is the frame tick
         calendar = new_calendar(n + 1, a["where"], a["qnext"], a["qprev"], buckets=large)

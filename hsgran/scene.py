@@ -774,7 +774,7 @@ def _build(doc: dict, text: str, source: str) -> Scene:
     planes = _make_planes(walls, head.periodic, material_names)
     cylinders = _make_cylinders(walls, material_names)
     parts = _make_parts(walls, material_names, fixed)
-    _check_moving(planes, cylinders, parts, enduring.treatment)
+    _check_moving(planes, cylinders, enduring.treatment)
     space = _space(planes, cylinders, parts, walls, head.periodic)
 
     # everything that does not need the fills' positions, before the (costly) placement
@@ -1338,13 +1338,13 @@ def _box_motions(w: dict, key: str, periodic: tuple) -> dict:
     return motions
 
 
-def _check_moving(planes: list[Plane], cylinders: tuple, parts: tuple, treatment: str) -> None:
+def _check_moving(planes: list[Plane], cylinders: tuple, treatment: str) -> None:
     moving = ([p.key for p in planes if p.motion is not None]
-              + [c.key for c in cylinders] + [q.key for q in parts])
+              + [c.key for c in cylinders if c.angular_velocity != 0.0])
     if moving and treatment == "clusters":
-        raise InputError(f"moving walls, cylinders, finite walls and fixed spheres "
-                         f"({moving[0]}) are not supported with the cluster treatment yet; use "
-                         "\"pairwise\"", "enduring_contact.treatment")
+        raise InputError(f"moving planes and turning cylinders ({moving[0]}) are not "
+                         "supported with the cluster treatment yet; use \"pairwise\"",
+                         "enduring_contact.treatment")
 
 
 def _check_periodic_planes(walls: _Walls, periodic: tuple) -> None:

@@ -9,6 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
+from hsgran._flight import TOUCH_REL
 from hsgran.engine import Simulation
 from hsgran.errors import InputError
 from hsgran.events.kinds import EV_LAND, EV_WALL
@@ -241,11 +242,39 @@ def test_spheres_must_start_on_the_cylinders_side():
     assert "walls[0]" in str(err.value)
 
 
-def test_cylinders_are_refused_with_the_cluster_treatment():
-    text = BALL.format(duration=0.1, more="", omega=0.0, x=0.0, z=0.0, u=0.0, w=0.0)
+def test_turning_cylinders_are_refused_with_the_cluster_treatment():
+    text = BALL.format(duration=0.1, more="", omega=2.0, x=0.0, z=0.0, u=0.0, w=0.0)
     with pytest.raises(InputError) as err:
         parse_scene(text + '[enduring_contact]\ntreatment = "clusters"\n')
     assert "enduring_contact.treatment" in str(err.value)
+    assert "walls[0]" in str(err.value)
+
+
+@pytest.mark.parametrize("x0", [0.0, 0.004, 0.011])
+def test_two_spheres_in_a_fixed_drum_come_to_rest_at_its_bottom_as_a_cluster(x0):
+    """Two spheres dropped side by side (offset by ``x0``) into a fixed drum with the cluster
+    treatment (rolling resistance stops their rocking): they meet the inside of the cylinder
+    and each other at once, a cluster with concave contacts (hsgran._cluster,
+    CONCAVE_SINK_REL), and come to rest touching the cylinder (R − r from its axis) and each
+    other (within TOUCH_REL σ), never sinking into it by more than the touching tolerance."""
+    r, big = 0.002, 0.05
+    text = BALL.format(duration=1.0, more=', "rotation", "friction", "rolling_resistance"',
+                       omega=0.0, x=x0 - 0.00201, z=-0.03, u=0.0, w=0.0)
+    text += ("[[particles]]\nmaterial = \"steel\"\nradius = 0.002\n"
+             f"position = [{x0 + 0.00201}, 0.0, -0.03]\n"
+             "[enduring_contact]\ntreatment = \"clusters\"\n"
+             "[[contacts]]\nbetween = [\"steel\", \"steel\"]\nrestitution = 0.5\n"
+             "sliding_friction = 0.3\nrolling_friction = 0.02\n")
+    _, frames, _ = run(text)
+    pos = frames["position"]
+    from_axis = np.hypot(pos[..., 0], pos[..., 2])
+    assert from_axis.max() <= big - r + OVERLAP_TOL
+    gap = np.linalg.norm(pos[:, 0] - pos[:, 1], axis=-1) - 2 * r
+    assert gap.min() > -OVERLAP_TOL
+    assert np.all(frames["motion_state"][-1] == MS_REST)
+    np.testing.assert_allclose(from_axis[-1], big - r, rtol=0, atol=1e-9)
+    assert gap[-1] <= TOUCH_REL * 2 * r  # touching, as the treatment counts it
+    assert np.all(pos[-1, :, 2] < -0.04)  # near the bottom
 
 
 def test_cylinders_in_files_and_exported_drawings(tmp_path):

@@ -641,18 +641,13 @@ material = "steel"
     assert np.all(np.abs(x[after, 2] - (0.01 + R - 0.5 * G * tau**2)) <= slack)
 
 
-def test_a_triangle_written_twice_keeps_its_rim_and_clusters_are_refused():
-    """Two copies of one triangle (an STL defect) are one plate with its edges and corners;
-    the cluster treatment refuses finite walls (not supported yet)."""
+def test_a_triangle_written_twice_keeps_its_rim():
+    """Two copies of one triangle (an STL defect) are one plate with its edges and corners."""
     tri = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     parts = weld(polygon(tri, 0, "a") + polygon(tri.copy(), 0, "b"))
     assert [q.kind for q in parts].count(WK_FACE) == 2  # its two sides, once each
     assert [q.kind for q in parts].count(WK_CYLINDER) == 3
     assert [q.kind for q in parts].count(WK_BALL) == 3
-    text = scene_text(SQUARE, (0.0, 0.0, 0.01)) + '[enduring_contact]\ntreatment = "clusters"\n'
-    with pytest.raises(InputError) as err:
-        parse_scene(text)
-    assert err.value.key == "enduring_contact.treatment"
 
 
 POCKET = """
@@ -675,18 +670,21 @@ sliding_friction = 0.3
 """
 
 
+@pytest.mark.parametrize("treatment", ["pairwise", "clusters"])
 @pytest.mark.parametrize("tilt", [0.0, 15.0, 30.0])
-def test_a_bead_dropped_into_a_pocket_of_fixed_beads_rests_there(tilt):
+def test_a_bead_dropped_into_a_pocket_of_fixed_beads_rests_there(tilt, treatment):
     """Three fixed beads on a floor (a rough base's pocket; gravity tilted by ``tilt`` degrees,
     a chute's, less than the 37° of the pocket's walls, so that it holds the bead), a bead
     dropped into it from 0.2 mm: it bounces, falls asleep on the fixed beads
     ([OURS], docs/walls.md, "Resting on fixed spheres") and stays there, touching them and
     overlapping none. It used to buzz between them until the collapse guard stopped the run
-    (a 440-bead chute at 0.044 s)."""
+    (a 440-bead chute at 0.044 s). The cluster treatment, which takes the fixed beads as
+    immovable partners, rests it there too."""
     r, s = 0.001, 0.0021
     g = 9.81
     th = math.radians(tilt)
     text = POCKET.format(gravity=[g * math.sin(th), 0.0, -g * math.cos(th)])
+    text += f'[enduring_contact]\ntreatment = "{treatment}"\n'
     centres = np.array([[s / math.sqrt(3.0) * math.cos(a), s / math.sqrt(3.0) * math.sin(a), r]
                         for a in (0.0, 2.0 * math.pi / 3.0, 4.0 * math.pi / 3.0)])
     for c in centres.tolist():
@@ -703,4 +701,4 @@ def test_a_bead_dropped_into_a_pocket_of_fixed_beads_rests_there(tilt):
     assert np.ptp(pos[-10:], axis=0).max() == 0.0
     assert gaps[-1].min() < 1e-9  # on the fixed beads
     assert pos[-1, 2] > r  # above the floor, in the pocket
-    assert summary.events["land"] >= 1
+    assert summary.events["land" if treatment == "pairwise" else "cluster"] >= 1
