@@ -40,6 +40,7 @@ import math
 
 import numpy as np
 
+from hsgran._cylinder import concave
 from hsgran._flight import (
     TOUCH_REL,
     advance,
@@ -90,7 +91,7 @@ from hsgran.contact.model import (
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S
 from hsgran.motion import NEVER
 from hsgran.onplane import END_NONE, END_RESOLVE, MS_FLIGHT, MS_REST, MS_SUPPORTED
-from hsgran.wallspec import BL_RADIUS, CY_RADIUS, CY_SIDE, WK_BALL, WK_CYLINDER, WK_FACE, WK_PLANE
+from hsgran.wallspec import BL_RADIUS, CY_RADIUS, WK_BALL, WK_CYLINDER, WK_FACE, WK_PLANE
 
 #: A segment of constant accelerations lasts until a contact between spheres has moved
 #: tangentially by this fraction of σ [-]: the contact normal then turns by 1e-4 rad and the
@@ -261,7 +262,7 @@ def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotati
                 gap = wall_gap(s, w, st, walls)
             if gap <= TOUCH_REL * rs and nc < max_c:
                 driven = driven or moving(walls, w)
-                if gap < 0.0 and _concave(walls, w):
+                if gap < 0.0 and concave(walls, w):
                     _to_surface(s, w, gap, st, walls)
                 nc = _add_contact(clus, nc, p, -1, -1 - w, planes_mat[w], planes_n[w, 0],
                                   planes_n[w, 1], planes_n[w, 2],
@@ -301,12 +302,6 @@ def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotati
                 q = np.int64(nxt[q])
         p += 1
     return nb, nc, driven, left
-
-
-@njit(inline="always")
-def _concave(walls, w):
-    """Whether wall w is the inside of a cylinder."""
-    return walls.planes_kind[w] == WK_CYLINDER and walls.planes_cyl[w, CY_SIDE] > 0.0
 
 
 @njit(inline="always")
@@ -428,18 +423,15 @@ def _room(c, clus, walls):
     its radius inside a cylinder, and no limit on a flat wall (inf)."""
     r = clus.cl_rad[clus.ck_a[c]]
     q = clus.ck_q[c]
-    if clus.ck_b[c] >= 0 or q >= 0:
-        return CURVATURE_REL * (r + clus.ck_rb[c])
     w = -1 - q
-    kind = walls.planes_kind[w]
-    if kind == WK_BALL:
-        return CURVATURE_REL * (r + walls.planes_geo[w, BL_RADIUS])
-    if kind == WK_CYLINDER:
-        rho = walls.planes_cyl[w, CY_RADIUS]
-        if walls.planes_cyl[w, CY_SIDE] > 0.0:
-            return math.sqrt(2.0 * max(rho - r, 0.0) * CONCAVE_SINK_REL * r)
-        return CURVATURE_REL * (r + rho)
-    return math.inf
+    if clus.ck_b[c] >= 0 or q >= 0 or walls.planes_kind[w] == WK_BALL:
+        return CURVATURE_REL * (r + clus.ck_rb[c])  # (ck_rb: the partner's radius)
+    if walls.planes_kind[w] != WK_CYLINDER:
+        return math.inf
+    rho = walls.planes_cyl[w, CY_RADIUS]
+    if concave(walls, w):
+        return math.sqrt(2.0 * max(rho - r, 0.0) * CONCAVE_SINK_REL * r)
+    return CURVATURE_REL * (r + rho)
 
 
 @njit
@@ -921,17 +913,16 @@ def hands_over(i, j, flight, dyn, flags):
 
 
 @njit
-def _grown(i, j, w, t, fast, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
-           rec, flags):
-    """Gather and solve the cluster of sphere i (and sphere j ≥ 0 or wall w) at time t [s];
-    where the solve stops short of the slack while moving spheres were left out as its
-    boundary (HAND_OVER_REACH), gather it again reaching twice as far and solve that (a
-    boundary sphere pressing a body against fixed walls can leave it no motion that
-    approaches nothing). Returns the energy taken [J]."""
+def _grown(i, j, w, t, fast, nb, nc, left, flight, dyn, walls, space, grid, sched, clus, isc,
+           pair_table, fsc, rec, flags):
+    """Solve the cluster of sphere i (and sphere j ≥ 0 or wall w) at time t [s], gathered
+    (nb bodies, nc contacts; ``left``: moving spheres were left out as its boundary); where
+    the solve stops short of the slack while moving spheres were left out
+    (HAND_OVER_REACH), gather it again reaching twice as far and solve that (a boundary
+    sphere pressing a body against fixed walls can leave it no motion that approaches
+    nothing). Returns the energy taken [J]."""
     reach = _reach(flags)
     while True:
-        nb, nc, _, left = gather(i, j, t, fast, reach, flight, dyn, walls, space, grid, clus,
-                                 flags[FL_ROTATION])
         final = not left or nb >= clus.cl_body.shape[0]
         seed = _seed_contact(nc, clus, j, w) if (j >= 0 or w >= 0) else -1
         loss = _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc,
@@ -940,6 +931,8 @@ def _grown(i, j, w, t, fast, flight, dyn, walls, space, grid, sched, clus, isc, 
         if loss == loss:  # (not NaN: solved, and written back)
             return loss
         reach *= 2
+        nb, nc, _, left = gather(i, j, t, fast, reach, flight, dyn, walls, space, grid, clus,
+                                 flags[FL_ROTATION])
 
 
 @njit
@@ -962,7 +955,7 @@ def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, 
         un = (st[i, 3] * walls.planes_n[w, 0] + st[i, 4] * walls.planes_n[w, 1]
               + st[i, 5] * walls.planes_n[w, 2])
     fast = un < -v_land
-    nb, nc, driven, _ = gather(i, j, t, fast, _reach(flags), flight, dyn, walls, space,
+    nb, nc, driven, left = gather(i, j, t, fast, _reach(flags), flight, dyn, walls, space,
                                   grid, clus, flags[FL_ROTATION])
     if (nc == 1 and nb == (2 if j >= 0 else 1) and mstate[i] == MS_FLIGHT
             and (j < 0 or mstate[j] == MS_FLIGHT)) or (
@@ -972,9 +965,8 @@ def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, 
         # which the treatment takes only as it moves now: left to the pairwise rules
         release(nb, clus)
         return CL_ISOLATED
-    release(nb, clus)
-    _grown(i, j, w, t, fast, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
-           rec, flags)
+    _grown(i, j, w, t, fast, nb, nc, left, flight, dyn, walls, space, grid, sched, clus, isc,
+           pair_table, fsc, rec, flags)
     return CL_SOLVED
 
 
@@ -983,8 +975,10 @@ def cluster_resolve(i, t, flight, dyn, walls, space, grid, sched, clus, isc, pai
                     rec, flags):
     """Sphere i's segment has ended (or a support of it moved): solve its cluster again at
     time t [s]. Returns the energy taken [J]."""
-    return _grown(i, -1, -1, t, False, flight, dyn, walls, space, grid, sched, clus, isc,
-                  pair_table, fsc, rec, flags)
+    nb, nc, _, left = gather(i, -1, t, False, _reach(flags), flight, dyn, walls, space, grid,
+                             clus, flags[FL_ROTATION])
+    return _grown(i, -1, -1, t, False, nb, nc, left, flight, dyn, walls, space, grid, sched,
+                  clus, isc, pair_table, fsc, rec, flags)
 
 
 def slack(landing_speed: float) -> float:

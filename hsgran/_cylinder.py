@@ -35,7 +35,15 @@ from hsgran.facets import END_OFF
 from hsgran.materials import P_MU_R, P_MU_S, SOLID_SPHERE_INERTIA
 from hsgran.motion import NEVER, face_exit_time
 from hsgran.onplane import END_NONE, END_SLIP, MS_REST, MS_ROLLING, plane_segment
-from hsgran.wallspec import CY_AXIS, CY_FINITE, CY_HALF, CY_OMEGA, CY_RADIUS, CY_SIDE
+from hsgran.wallspec import (
+    CY_AXIS,
+    CY_FINITE,
+    CY_HALF,
+    CY_OMEGA,
+    CY_RADIUS,
+    CY_SIDE,
+    WK_CYLINDER,
+)
 
 #: A segment on a cylinder turns at most this angle about the axis [rad], and lasts at most
 #: this share of √(ρ/|g|). Its accelerations are those of its start, so it errs by
@@ -59,6 +67,12 @@ CARRY_ROUND_REL = 1e-12
 #: The segment ended because it had turned CURVE_STEP (an ``END_*`` code of hsgran.onplane's
 #: family, handled here).
 END_CURVE = 5
+
+
+@njit(inline="always")
+def concave(walls, w):
+    """Whether wall row w is a cylinder holding spheres inside it (the only concave wall)."""
+    return walls.planes_kind[w] == WK_CYLINDER and walls.planes_cyl[w, CY_SIDE] > 0.0
 
 
 @njit(inline="always")

@@ -9,7 +9,7 @@ pair event whose partner has moved on since is known to be stale (lazy invalidat
 
 from __future__ import annotations
 
-from hsgran._cylinder import across_axis, axis_offset
+from hsgran._cylinder import across_axis, axis_offset, concave
 from hsgran._flight import (
     PLANE_TOUCHING_REL,
     TOUCH_REL,
@@ -169,7 +169,7 @@ def held_by_wall(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, slack, horizon):
     qx, qy, qz = axis_offset(x, y, z, walls, w)
     ux, uy, uz = across_axis(u, v, w_, walls, w)
     ax, ay, az = across_axis(gx, gy, gz, walls, w)
-    if cyl[w, CY_SIDE] < 0.0:  # from outside, or an edge
+    if not concave(walls, w):  # from outside, or an edge
         return held_apart(qx, qy, qz, ux, uy, uz, ax, ay, az, r + cyl[w, CY_RADIUS], slack,
                           horizon)
     d = max((qx * qx + qy * qy + qz * qz) ** 0.5, 1e-300)
