@@ -174,3 +174,46 @@ def test_an_unknown_treatment_is_a_one_line_error_naming_the_key():
                        e=0.5).replace('treatment = "clusters"', 'treatment = "soft"')
     with pytest.raises(InputError, match=r"enduring_contact\.treatment.*'pairwise', 'clusters'"):
         parse_scene(text + FLOOR + sphere(("0.0", "0.0", "0.002")))
+
+
+@pytest.mark.parametrize("partner", ["sphere", "boundary"])
+@pytest.mark.parametrize("closing", [True, False])
+def test_a_slow_sphere_is_not_halted_while_a_moving_partner_closes_on_it(partner, closing):
+    """A solve puts a body to rest only where nothing that goes on moving approaches it now
+    (``_cluster._rest_candidates``): halted, it would be met at once, and the same solve would
+    follow again and again (a zero-time sequence: a corpus box at 0.487 s). Side by side along
+    x, so that neither rests on the other: a body slower than the landing speed and still at
+    the step's end rests unless its partner, a moving body or a moving boundary sphere, closes
+    on it faster than the prediction's slack."""
+    from hsgran._cluster import NO_CONTACT, _rest_candidates
+    from hsgran._state import F_LANDING_SPEED, GROUPS, Clus
+
+    sim = Simulation(scene(FLOOR + sphere(("0.0", "0.0", num(R)))
+                           + sphere((num(2 * R), "0.0", num(R)))))
+    clus = sim._groups[GROUPS.index(Clus)]
+    v_land = 1e-3
+    fsc = np.zeros(16)
+    fsc[F_LANDING_SPEED] = v_land
+    speed = 1e-4 * (1.0 if closing else -1.0)  # towards the resting one (< v_land)
+    for arr in (clus.cl_v, clus.cl_w, clus.cl_a, clus.cl_al, clus.ck_vb, clus.ck_ab):
+        arr[:] = 0.0
+    clus.ck_a[0] = 0  # the slow body, at x = 0; n from the partner (at +x) to it: −x
+    clus.ck_n[0] = (-1.0, 0.0, 0.0)
+    clus.ck_tgt[0] = 0.0  # persisting
+    assert clus.ck_tgt[0] != NO_CONTACT
+    clus.cl_v[0] = (0.0, 2e-4, 0.0)  # slower than the landing speed, and still at the step's end
+    clus.cl_depth[:2] = 0
+    if partner == "sphere":
+        clus.ck_b[0] = 1
+        clus.cl_v[1] = (-speed, 0.0, 0.0)
+        clus.cl_a[1] = (-speed, 0.0, 0.0)  # goes on moving
+        nb = 2
+    else:
+        clus.ck_b[0] = -1
+        clus.ck_vb[0] = (-speed, 0.0, 0.0)
+        clus.ck_ab[0] = (-speed, 0.0, 0.0)
+        nb = 1
+    _rest_candidates(nb, 1, clus, fsc, np.array([0.0, 0.0, -G]))
+    assert (clus.cl_depth[0] < 0) == (not closing)
+    if partner == "sphere":
+        assert clus.cl_depth[1] == 0
