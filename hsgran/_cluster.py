@@ -44,6 +44,8 @@ from hsgran._cylinder import concave
 from hsgran._flight import (
     TOUCH_REL,
     advance,
+    ball,
+    curved,
     enter_plane,
     halt,
     leave_plane,
@@ -91,7 +93,7 @@ from hsgran.contact.model import (
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S
 from hsgran.motion import NEVER
 from hsgran.onplane import END_NONE, END_RESOLVE, MS_FLIGHT, MS_REST, MS_SUPPORTED
-from hsgran.wallspec import BL_RADIUS, CY_RADIUS, WK_BALL, WK_CYLINDER, WK_FACE, WK_PLANE
+from hsgran.wallspec import BL_RADIUS, CY_RADIUS, WK_FACE, WK_PLANE
 
 #: A segment of constant accelerations lasts until a contact between spheres has moved
 #: tangentially by this fraction of σ [-]: the contact normal then turns by 1e-4 rad and the
@@ -269,7 +271,7 @@ def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotati
                 nc = _add_contact(clus, nc, p, -1, -1 - w, planes_mat[w], planes_n[w, 0],
                                   planes_n[w, 1], planes_n[w, 2],
                                   walls.planes_geo[w, BL_RADIUS]
-                                  if walls.planes_kind[w] == WK_BALL else 0.0)
+                                  if ball(walls, w) else 0.0)
                 for k in range(3):
                     clus.ck_vb[nc - 1, k] = walls.planes_vel[w, k]
         for h in range(cell_heads(s, grid, space)):
@@ -426,9 +428,9 @@ def _room(c, clus, walls):
     r = clus.cl_rad[clus.ck_a[c]]
     q = clus.ck_q[c]
     w = -1 - q
-    if clus.ck_b[c] >= 0 or q >= 0 or walls.planes_kind[w] == WK_BALL:
+    if clus.ck_b[c] >= 0 or q >= 0 or ball(walls, w):
         return CURVATURE_REL * (r + clus.ck_rb[c])  # (ck_rb: the partner's radius)
-    if walls.planes_kind[w] != WK_CYLINDER:
+    if not curved(walls, w):
         return math.inf
     rho = walls.planes_cyl[w, CY_RADIUS]
     if concave(walls, w):
