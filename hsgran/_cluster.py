@@ -79,7 +79,7 @@ from hsgran._state import (
     WARM_EMPTY,
     WARM_SLOTS,
 )
-from hsgran.contact.cluster import cap, solve_polished, start
+from hsgran.contact.cluster import FRICTION_SWEEPS, cap, solve_polished, start
 from hsgran.contact.model import (
     REC_CAPTURED,
     REC_E_N,
@@ -577,14 +577,16 @@ def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation, friction, rolling
 
 
 @njit
-def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol):
+def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol, grow):
     """:func:`hsgran.contact.cluster.solve_polished` on the cluster's contacts, with the
     bodies' velocities (or the step's end velocities) ``v``, ``w`` and the immovable partners'
-    ``vb``; returns (sweeps, worst)."""
+    ``vb``; with ``grow``, a stalled friction solve stops short; returns (sweeps, worst,
+    stalled)."""
     return solve_polished(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, vb, clus.ck_tgt,
                           clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip,
                           clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, v, w, clus.ck_pn,
-                          clus.ck_pt, clus.ck_hr, rotation, friction, rolling, tol)
+                          clus.ck_pt, clus.ck_hr, rotation, friction, rolling, tol,
+                          FRICTION_SWEEPS, grow)
 
 
 @njit(inline="always")
@@ -612,8 +614,8 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
             clus.cl_al[b, k] = clus.cl_w[b, k] if rotation and not held else 0.0
     for c in range(nc):
         _cold(c, clus)
-    sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation, False,
-                                   False, SOLVE_TOL_REL * space.slack[0])
+    sweeps, worst, _ = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
+                                      False, False, SOLVE_TOL_REL * space.slack[0], False)
     _count(isc, sweeps, nc, True)
     if worst > space.slack[0]:
         for b in range(nb):
@@ -624,13 +626,17 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
 
 
 @njit
-def _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling):
+def _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling, grow):
     """The step's force solve, on from the impulses it has; if it stops short of the slack,
     the fallback :func:`_unsolved_step` (counted in ``isc[I_UNSOLVED]``). Returns whether it
-    was solved."""
-    sweeps, worst = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
-                                   friction, rolling, SOLVE_TOL_REL * space.slack[0])
+    was solved; with ``grow``, False at once where friction stalls (the caller solves a larger
+    cluster)."""
+    sweeps, worst, stalled = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab,
+                                            rotation, friction, rolling,
+                                            SOLVE_TOL_REL * space.slack[0], grow)
     _count(isc, sweeps, nc, True)
+    if stalled:
+        return False
     if worst > space.slack[0]:
         isc[I_UNSOLVED] += 1
         _unsolved_step(nb, nc, h, clus, isc, space, rotation)
@@ -865,12 +871,16 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     of contact ``seed`` (or −1) goes to ``rec`` for the event log. Returns the energy the
     cluster took [J] (the impulses' loss and what the spheres put to rest gave up); unless
     ``final``, NaN, with nothing written back, where the impulses or the step stop short of
-    the slack (the caller grows the cluster: see :func:`_grown`)."""
+    the slack or their friction stalls (the caller grows the cluster: see :func:`_grown`)."""
     rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
     e0 = _kinetic(nb, clus, rotation)
     _impact_setup(nc, clus, pair_table, dyn.mat, rec, fsc, flags)
-    sweeps, worst = _solve_cluster(nc, clus, clus.cl_v, clus.cl_w, clus.ck_vb, rotation,
-                                   friction, rolling, SOLVE_TOL_REL * space.slack[0])
+    sweeps, worst, stalled = _solve_cluster(nc, clus, clus.cl_v, clus.cl_w, clus.ck_vb,
+                                            rotation, friction, rolling,
+                                            SOLVE_TOL_REL * space.slack[0], not final)
+    _count(isc, sweeps, nc, False)
+    if stalled:
+        return math.nan
     for k in range(rec.shape[0]):
         rec[k] = math.nan
     rec[REC_J_N] = clus.ck_pn[seed] if seed >= 0 else 0.0
@@ -879,14 +889,14 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     rec[REC_STAGE] = STAGE_CLUSTER
     rec[REC_REGIME] = nb
     loss = e0 - _kinetic(nb, clus, rotation)
-    _count(isc, sweeps, nc, False)
     h = _segment_time(nc, clus, MAX_SEGMENT, False, t, walls)
     _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation, friction,
                 rolling)
-    solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling)
+    solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling, not final)
     _rest_candidates(nb, nc, clus, fsc, space.gravity)
     if solved and _hold_rests(nb, nc, clus):
-        solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling)
+        solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling,
+                             not final)
     if not final and (not solved or worst > space.slack[0]):
         return math.nan
     if solved:
@@ -938,10 +948,10 @@ def _grown(i, j, w, t, fast, nb, nc, left, flight, dyn, walls, space, grid, sche
            pair_table, fsc, rec, flags):
     """Solve the cluster of sphere i (and sphere j ≥ 0 or wall w) at time t [s], gathered
     (nb bodies, nc contacts; ``left``: moving spheres were left out as its boundary); where
-    the solve stops short of the slack while moving spheres were left out
-    (HAND_OVER_REACH), gather it again reaching twice as far and solve that (a boundary
-    sphere pressing a body against fixed walls can leave it no motion that approaches
-    nothing). Returns the energy taken [J]."""
+    the solve stops short of the slack, or its friction stalls, while moving spheres were
+    left out (HAND_OVER_REACH), gather it again reaching twice as far and solve that (a
+    boundary sphere pressing a body against fixed walls can leave it no motion that
+    approaches nothing, or none that its friction allows). Returns the energy taken [J]."""
     reach = _reach(flags)
     while True:
         final = not left or nb >= clus.cl_body.shape[0]

@@ -8,7 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from hsgran.contact.cluster import solve, solve_polished, start
+from hsgran.contact.cluster import (
+    FRICTION_SWEEPS,
+    MAX_SWEEPS,
+    STALL_SWEEPS,
+    solve,
+    solve_polished,
+    start,
+)
 
 #: Steel sphere of radius 1 mm: mass [kg] and moment of inertia [kg m²].
 R = 1e-3
@@ -41,9 +48,11 @@ class Cluster:
         self.rows.append((a, b, n, rb, np.asarray(vb, float), target, mu,
                           np.asarray(slip, float), mur, reff))
 
-    def solve(self, rotation=True, friction=True, rolling=False, warm=None, friction_sweeps=None):
+    def solve(self, rotation=True, friction=True, rolling=False, warm=None, friction_sweeps=None,
+              stall=False, max_sweeps=MAX_SWEEPS):
         """Solve cold, or warm from ``warm`` = (pn, pt, hr) applied by ``start`` first; with
-        ``friction_sweeps``, by ``solve_polished`` with that many tangential sweeps."""
+        ``friction_sweeps``, by ``solve_polished`` with that many tangential sweeps (and
+        ``stall`` as its ``grow``)."""
         nc = len(self.rows)
         col = list(zip(*self.rows, strict=True))
         self.pn = np.zeros(nc)
@@ -61,9 +70,9 @@ class Cluster:
                 self.v, self.w, self.pn, self.pt, self.hr, rotation, friction, rolling,
                 SOLVE_TOL)
         if friction_sweeps is None:
-            sweeps, worst = solve(*args)
+            sweeps, worst, self.stalled = solve(*args, max_sweeps, stall)
         else:
-            sweeps, worst = solve_polished(*args, friction_sweeps)
+            sweeps, worst, self.stalled = solve_polished(*args, friction_sweeps, stall)
         self.sweeps = sweeps
         return worst
 
@@ -289,3 +298,67 @@ def test_sphere_on_a_plate_hitting_a_wall_rebounds_along_the_plate():
     c.solve()
     np.testing.assert_allclose(c.v[0], (e * v, 0.0, 0.0), atol=TOL * v)
     assert c.pn[0] == pytest.approx(0.0, abs=TOL * M * v)
+
+
+def _pressed_into_a_wall(delta_deg, mu, speed=0.01):
+    """A sphere at rest on a fixed wall (normal +z) and touched from above by a boundary that
+    moves down into it at ``speed`` [m/s], its normal tilted by δ from the vertical: the
+    sphere can only get out sideways, which friction forbids where tan δ < 2 μ (the two
+    contacts' friction, each μ times a normal impulse of about the same size, against the
+    boundary's sideways push, tan δ times it): then no impulses meet both contacts."""
+    d = math.radians(delta_deg)
+    c = Cluster(1)
+    c.contact(0, -1, (0, 0, 1), mu=mu)
+    c.contact(0, -1, (math.sin(d), 0, -math.cos(d)), mu=mu, vb=(0, 0, -speed))
+    return c
+
+
+@pytest.mark.parametrize("rotation", [True, False])
+@pytest.mark.parametrize(("delta_deg", "mu"), [(10.0, 0.5), (20.0, 0.2)])
+def test_a_solve_with_no_solution_stalls_at_its_first_check(rotation, delta_deg, mu):
+    """Pressed into a wall by a moving boundary and locked by friction, the impulses grow
+    by the same amount every sweep: the solve without ``stall`` runs out its sweeps with
+    the contacts still closing; with it, it stops at the first comparison of two spans
+    (2 × STALL_SWEEPS sweeps) and says so; solve_polished then freezes friction there and
+    meets the normal conditions, or with ``grow`` hands the cluster back unfinished."""
+    c = _pressed_into_a_wall(delta_deg, mu)
+    assert c.solve(rotation=rotation, max_sweeps=4000) > 1e-3  # approaching at ~ mm/s
+    assert c.sweeps == 4000
+    assert not c.stalled
+    c = _pressed_into_a_wall(delta_deg, mu)
+    assert c.solve(rotation=rotation, stall=True) > 1e-3
+    assert c.sweeps == 2 * STALL_SWEEPS
+    assert c.stalled
+    c = _pressed_into_a_wall(delta_deg, mu)
+    worst = c.solve(rotation=rotation, friction_sweeps=FRICTION_SWEEPS)
+    assert worst <= SOLVE_TOL
+    assert not c.stalled
+    assert (np.linalg.norm(c.pt, axis=1) - mu * c.pn).max() <= 1e-15 * c.pn.max()
+    c = _pressed_into_a_wall(delta_deg, mu)
+    c.solve(rotation=rotation, friction_sweeps=FRICTION_SWEEPS, stall=True)
+    assert c.stalled
+    assert c.sweeps == 2 * STALL_SWEEPS
+
+
+def test_a_solve_with_a_solution_does_not_stall():
+    """Where friction lets the sphere out (tan δ > 2 μ), the solve converges as without
+    ``stall``, bit for bit; so does a column of 20 spheres on a plate, whose convergence is
+    slow (sweeps ∝ its length squared)."""
+    for make in (lambda: _pressed_into_a_wall(40.0, 0.1), lambda: _column(20)):
+        plain, watched = make(), make()
+        plain.solve()
+        watched.solve(stall=True)
+        assert not watched.stalled
+        assert watched.sweeps == plain.sweeps < MAX_SWEEPS
+        np.testing.assert_array_equal(watched.v, plain.v)
+        np.testing.assert_array_equal(watched.pn, plain.pn)
+
+
+def _column(n):
+    """n spheres stacked on a plate under gravity, with friction (force level)."""
+    c = Cluster(n)
+    c.v[:, 2] = -G
+    c.contact(0, -1, (0, 0, 1), mu=0.5)
+    for k in range(1, n):
+        c.contact(k, k - 1, (0, 0, 1), mu=0.5)
+    return c
