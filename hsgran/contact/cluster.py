@@ -358,15 +358,17 @@ def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
     tangential sweeps reached.
 
     With ``grow`` (the caller can solve a larger cluster instead, where the stall may come
-    from what it holds immovable), a friction solve that stalls (:func:`solve`) stops there
-    and returns ``stalled`` True, the impulses unfinished; otherwise a stall freezes the
-    tangential impulses as the end of the friction sweeps does. Returns (sweeps, worst,
-    stalled) as :func:`solve`."""
+    from what it holds immovable), a solve that stalls (:func:`solve`; with friction or
+    without: bodies pressed head-on between immovable partners that close on each other
+    have no solution either) stops there and returns ``stalled`` True, the impulses
+    unfinished; without it, a friction solve's stall freezes the tangential impulses as the
+    end of the friction sweeps does, and a frictionless solve runs to MAX_SWEEPS. Returns
+    (sweeps, worst, stalled) as :func:`solve`."""
     tangential = friction or rolling
     sweeps, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
                                    inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, friction,
                                    rolling, tol, friction_sweeps if tangential else MAX_SWEEPS,
-                                   tangential)
+                                   tangential or grow)
     if stalled and grow:
         return sweeps, worst, True
     if not tangential or (sweeps < friction_sweeps and not stalled):

@@ -340,6 +340,20 @@ def test_a_solve_with_no_solution_stalls_at_its_first_check(rotation, delta_deg,
     assert c.sweeps == 2 * STALL_SWEEPS
 
 
+def test_a_frictionless_solve_with_no_solution_stalls_where_the_cluster_can_grow():
+    """Frictionless, a sphere pressed head-on against a wall by a boundary that moves into it
+    has no way out: with ``grow`` solve_polished stops at the first comparison of two spans;
+    without it, the solve runs to MAX_SWEEPS as before (its caller falls back)."""
+    c = _pressed_into_a_wall(0.0, 0.0)
+    c.solve(friction=False, friction_sweeps=FRICTION_SWEEPS, stall=True)
+    assert c.stalled
+    assert c.sweeps == 2 * STALL_SWEEPS
+    c = _pressed_into_a_wall(0.0, 0.0)
+    assert c.solve(friction=False, friction_sweeps=FRICTION_SWEEPS) > 1e-3
+    assert not c.stalled
+    assert c.sweeps == MAX_SWEEPS
+
+
 def test_a_solve_with_a_solution_does_not_stall():
     """Where friction lets the sphere out (tan δ > 2 μ), the solve converges as without
     ``stall``, bit for bit; so does a column of 20 spheres on a plate, whose convergence is
