@@ -580,7 +580,7 @@ def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation, friction, rolling
 def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol, grow):
     """:func:`hsgran.contact.cluster.solve_polished` on the cluster's contacts, with the
     bodies' velocities (or the step's end velocities) ``v``, ``w`` and the immovable partners'
-    ``vb``; with ``grow``, a stalled friction solve stops short; returns (sweeps, worst,
+    ``vb``; with ``grow``, a solve that stalls stops short; returns (sweeps, worst,
     stalled)."""
     return solve_polished(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, vb, clus.ck_tgt,
                           clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip,
@@ -629,8 +629,8 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
 def _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling, grow):
     """The step's force solve, on from the impulses it has; if it stops short of the slack,
     the fallback :func:`_unsolved_step` (counted in ``isc[I_UNSOLVED]``). Returns whether it
-    was solved; with ``grow``, False at once where friction stalls (the caller solves a larger
-    cluster)."""
+    was solved; with ``grow``, False at once where the solve stalls (the caller solves a
+    larger cluster)."""
     sweeps, worst, stalled = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab,
                                             rotation, friction, rolling,
                                             SOLVE_TOL_REL * space.slack[0], grow)
@@ -871,7 +871,7 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     of contact ``seed`` (or −1) goes to ``rec`` for the event log. Returns the energy the
     cluster took [J] (the impulses' loss and what the spheres put to rest gave up); unless
     ``final``, NaN, with nothing written back, where the impulses or the step stop short of
-    the slack or their friction stalls (the caller grows the cluster: see :func:`_grown`)."""
+    the slack or their solve stalls (the caller grows the cluster: see :func:`_grown`)."""
     rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
     e0 = _kinetic(nb, clus, rotation)
     _impact_setup(nc, clus, pair_table, dyn.mat, rec, fsc, flags)
@@ -948,7 +948,7 @@ def _grown(i, j, w, t, fast, nb, nc, left, flight, dyn, walls, space, grid, sche
            pair_table, fsc, rec, flags):
     """Solve the cluster of sphere i (and sphere j ≥ 0 or wall w) at time t [s], gathered
     (nb bodies, nc contacts; ``left``: moving spheres were left out as its boundary); where
-    the solve stops short of the slack, or its friction stalls, while moving spheres were
+    the solve stops short of the slack, or stalls, while moving spheres were
     left out (HAND_OVER_REACH), gather it again reaching twice as far and solve that (a
     boundary sphere pressing a body against fixed walls can leave it no motion that
     approaches nothing, or none that its friction allows). Returns the energy taken [J]."""
