@@ -79,7 +79,7 @@ from hsgran._state import (
     WARM_EMPTY,
     WARM_SLOTS,
 )
-from hsgran.contact.cluster import FRICTION_SWEEPS, cap, solve_polished, start
+from hsgran.contact.cluster import cap, solve_polished, start
 from hsgran.contact.model import (
     REC_CAPTURED,
     REC_E_N,
@@ -586,7 +586,7 @@ def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol, grow):
                           clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip,
                           clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, v, w, clus.ck_pn,
                           clus.ck_pt, clus.ck_hr, rotation, friction, rolling, tol,
-                          FRICTION_SWEEPS, grow)
+                          grow=grow)
 
 
 @njit(inline="always")
