@@ -15,7 +15,7 @@ table (the thresholds are this tool's, not a law's).
 
 Usage:
     .venv/bin/python tools/chute.py [--angles 14,18,22,26,30] [--seconds 1.5] [--windows 6]
-        [--profile 24] [--jobs 2]
+        [--profile 24] [--jobs 2] [--timeout 600]
 """
 
 from __future__ import annotations
@@ -35,11 +35,13 @@ STOPPED = 1e-3  #: a mean speed below this is a stopped flow [m/s]
 
 
 def run_one(args) -> dict:
-    """Run the chute at ``angle`` degrees for ``seconds``; return its frames' figures."""
+    """Run the chute at ``angle`` degrees for ``seconds`` of simulated time, or until
+    ``timeout`` seconds of wall time (None: no limit); return its frames' figures and where
+    it stopped early (the collapse guard, or the timeout)."""
     from hsgran.engine import Simulation, SimulationError
     from hsgran.scene import load_scene
 
-    angle, seconds = args
+    angle, seconds, timeout = args
     th = math.radians(angle)
     scene = load_scene(SCENE, overrides={
         "scene.gravity": [9.81 * math.sin(th), 0.0, -9.81 * math.cos(th)],
@@ -57,13 +59,41 @@ def run_one(args) -> dict:
 
     wall = time.perf_counter()
     guard = None
+    timed_out = None
     events = {}
+
+    def out_of_time() -> bool:
+        return timeout is not None and time.perf_counter() - wall > timeout
+
     try:
-        events = sim.run(observers=[Keep()]).events
+        summary = sim.run(observers=[Keep()], stop=out_of_time)
+        events = summary.events
+        if summary.interrupted:
+            timed_out = sim.time
     except SimulationError as err:  # the collapse guard: reported, not hidden
         guard = (sim.time, str(err))
     return {"angle": angle, "wall": time.perf_counter() - wall, "guard": guard,
-            "events": events, **{k: np.array(v) for k, v in frames.items()}}
+            "timed_out": timed_out, "events": events,
+            **{k: np.array(v) for k, v in frames.items()}}
+
+
+def classify(means: list[float], guard: float | None, timed_out: float | None,
+             steady: float) -> str:
+    """What a run's flow did, from its mean velocities per window [m/s]: where it stopped
+    early (the collapse guard at ``guard`` s, or the wall-time limit at ``timed_out`` s of
+    simulated time: its last windows are then empty and say nothing), else stopped (the last
+    window below STOPPED), steady (the last two windows within ``steady`` of each other),
+    accelerating or slowing."""
+    if guard is not None:
+        return f"guard at {guard:.4f} s"
+    if timed_out is not None:
+        return f"timed out at {timed_out:.4f} s"
+    last, before = means[-1], means[-2]
+    if not last > STOPPED:
+        return "stopped"
+    if abs(last - before) <= steady * last:
+        return "steady"
+    return "accelerating" if last > before else "slowing"
 
 
 def main() -> None:
@@ -77,10 +107,13 @@ def main() -> None:
     ap.add_argument("--profile", type=float, default=None,
                     help="print the velocity profile of this inclination (one of --angles)")
     ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--timeout", type=float, default=None,
+                    help="wall time [s] after which a run stops and is reported as timed out "
+                         "(default: none)")
     a = ap.parse_args()
     angles = [float(s) for s in a.angles.split(",")]
     with ProcessPoolExecutor(max_workers=a.jobs) as pool:
-        results = list(pool.map(run_one, [(th, a.seconds) for th in angles]))
+        results = list(pool.map(run_one, [(th, a.seconds, a.timeout) for th in angles]))
     edges = np.linspace(0.0, a.seconds, a.windows + 1)
     print("theta  mean v_x of the beads per window [m/s]" + " " * 13
           + "at rest  flow          wall [s]  events")
@@ -89,18 +122,12 @@ def main() -> None:
         for lo, hi in itertools.pairwise(edges):
             sel = (r["t"] > lo) & (r["t"] <= hi + 1e-12)
             means.append(r["vx"][sel].mean() if sel.any() else math.nan)
-        last, before = means[-1], means[-2]
-        if r["guard"]:
-            flow = f"guard at {r['guard'][0]:.4f} s"
-        elif not last > STOPPED:
-            flow = "stopped"
-        elif abs(last - before) <= a.steady * last:
-            flow = "steady"
-        else:
-            flow = "accelerating" if last > before else "slowing"
+        flow = classify(means, r["guard"][0] if r["guard"] else None, r["timed_out"],
+                        a.steady)
         n_events = sum(v for k, v in r["events"].items() if k in ("pair", "wall"))
+        rest = r["rest"][-1] if len(r["rest"]) else 0
         print(f"{r['angle']:5.1f}  " + " ".join(f"{m:7.4f}" for m in means)
-              + f"  {r['rest'][-1]:7d}  {flow:<13} {r['wall']:8.1f}  {n_events:,} collisions")
+              + f"  {rest:7d}  {flow:<13} {r['wall']:8.1f}  {n_events:,} collisions")
         if a.profile is not None and r["angle"] == a.profile:
             half = r["t"] >= 0.5 * a.seconds
             if not half.any():
