@@ -113,6 +113,7 @@ from hsgran._state import (
     I_PEND_B,
     I_PEND_LAYER,
     I_SEQ,
+    I_VISITS,
     S_R,
     S_T,
     S_V,
@@ -659,9 +660,10 @@ def _loop_of(grav_on):
 
     @njit
     def run_loop(flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc, counts,
-                 max_collisions, max_events, rec, flags):
-        """Run events until t_end, a full buffer, ``max_collisions`` collisions or ``max_events``
-        events of any kind (this call); returns a ``STATUS_*`` code.
+                 max_collisions, max_events, max_visits, rec, flags):
+        """Run events until t_end, a full buffer, ``max_collisions`` collisions, ``max_events``
+        events of any kind or ``max_visits`` contact visits of the cluster solves (this call);
+        returns a ``STATUS_*`` code.
 
         The groups are those of :mod:`hsgran._state`.
         """
@@ -671,6 +673,7 @@ def _loop_of(grav_on):
         t_end = fsc[F_T_END]
         executed = 0
         popped = 0
+        visits_end = isc[I_VISITS] + max_visits
         guess = -1  # the sphere likely to have the next event (_prefetch_next)
         # Prefetch hints only for large systems, whose data do not fit the cache. The calendar
         # has buckets exactly for them, and has_buckets is a constant of its type: for small
@@ -755,7 +758,7 @@ def _loop_of(grav_on):
             elif r != GO_ON:
                 return r
             popped += 1
-            if popped >= max_events:
+            if popped >= max_events or isc[I_VISITS] >= visits_end:
                 return STATUS_BUDGET
 
     return run_loop
@@ -766,10 +769,11 @@ run_loop_free = _loop_of(False)
 
 
 def run_loop(flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc, counts,
-             max_collisions, max_events, rec, flags):
-    """Run events until t_end, a full buffer, ``max_collisions`` collisions or ``max_events``
-    events of any kind; returns a ``STATUS_*`` code (the compiled loop for the scene's gravity
-    switch, ``flags[FL_GRAVITY]``)."""
+             max_collisions, max_events, max_visits, rec, flags):
+    """Run events until t_end, a full buffer, ``max_collisions`` collisions, ``max_events``
+    events of any kind or ``max_visits`` contact visits of the cluster solves; returns a
+    ``STATUS_*`` code (the compiled loop for the scene's gravity switch,
+    ``flags[FL_GRAVITY]``)."""
     loop = run_loop_gravity if flags[FL_GRAVITY] else run_loop_free
     return loop(flight, dyn, walls, space, grid, sched, clus, out, pair_table, fsc, isc, counts,
-                max_collisions, max_events, rec, flags)
+                max_collisions, max_events, max_visits, rec, flags)

@@ -66,6 +66,12 @@ LOG_BUFFER = 1 << 16
 #: interrupt waits for the engine to notice it (~0.2 s at 1e6 events/s), also in runs where
 #: cell crossings outnumber collisions.
 EVENTS_PER_CALL = 200_000
+#: Contact visits of the cluster solves (hsgran._cluster; ``Simulation.isc[I_VISITS]``) after
+#: which a compiled call returns too: where events are solves of a dense bed in constrained
+#: motion (~10⁵–10⁶ visits each), EVENTS_PER_CALL of them took half an hour, and ``stop``,
+#: the progress bar and the checkpoints by wall time waited as long. 10⁸ visits are ~0.1–0.5 s
+#: of solving on these machines.
+VISITS_PER_CALL = 100_000_000
 #: Version of the checkpoint layout (:meth:`Simulation.checkpoint`); a checkpoint of another
 #: version is refused rather than misread (2: the pair contacts kept for cell crossings; 3: the
 #: "wedge" event count; 4: per-sphere fields at least FIELD_MIN long; 5: arrays named by field,
@@ -574,10 +580,12 @@ class Simulation:
                 - self.exited_energy)
 
     def _call(self, max_collisions: int) -> int:
-        """Run the compiled loop for at most ``max_collisions`` collisions and at most
-        :data:`EVENTS_PER_CALL` events of any kind."""
+        """Run the compiled loop for at most ``max_collisions`` collisions, at most
+        :data:`EVENTS_PER_CALL` events of any kind and about :data:`VISITS_PER_CALL` contact
+        visits of the cluster solves (the event that passes it ends the call)."""
         return ev.run_loop(*self._groups, self.pair_table, self.fsc, self.isc, self.counts,
-                           max_collisions, EVENTS_PER_CALL, self.rec, self.flags)
+                           max_collisions, EVENTS_PER_CALL, VISITS_PER_CALL, self.rec,
+                           self.flags)
 
     def _frame_block(self) -> FrameBlock | None:
         f = int(self.isc[es.I_N_FRAMES])
@@ -770,9 +778,10 @@ class Simulation:
             checkpoint_wall: ... and whenever this much wall time [s] has passed since the
                 last one (``None``: not by wall time). A checkpoint is also handed over when the
                 run reaches ``until`` and when ``stop`` ends it.
-            stop: Called between compiled calls (at most :data:`EVENTS_PER_CALL` events
-                apart); when it returns True the run flushes, hands over a checkpoint and
-                returns with ``interrupted`` set.
+            stop: Called between compiled calls (at most :data:`EVENTS_PER_CALL` events, or
+                about :data:`VISITS_PER_CALL` contact visits of the cluster solves, apart); when
+                it returns True the run flushes, hands over a checkpoint and returns with
+                ``interrupted`` set.
 
         Returns:
             :class:`RunSummary` of this call.

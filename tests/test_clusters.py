@@ -217,3 +217,26 @@ def test_a_slow_sphere_is_not_halted_while_a_moving_partner_closes_on_it(partner
     assert (clus.cl_depth[0] < 0) == (not closing)
     if partner == "sphere":
         assert clus.cl_depth[1] == 0
+
+
+def test_a_call_of_the_compiled_loop_ends_after_its_budget_of_solver_work(monkeypatch):
+    """The run hands control back (``stop``, progress, checkpoints) after about
+    VISITS_PER_CALL contact visits of the cluster solves, not only after EVENTS_PER_CALL
+    events; cutting the run there changes nothing. A sphere rolling down a groove is solved
+    again at every segment end (MAX_SEGMENT = 1 ms): with a budget of one visit each solve
+    ends a call."""
+    import hsgran.engine as engine
+
+    b, th = math.radians(45.0), math.radians(5.0)
+    body = groove(b) + sphere(("0.0", "0.0", num(R / math.cos(b))))
+    gravity = (G * math.sin(th), 0.0, -G * math.cos(th))
+    whole = Simulation(scene(body, duration=0.05, gravity=gravity, mu=0.9))
+    whole.run()
+    monkeypatch.setattr(engine, "VISITS_PER_CALL", 1)
+    cut = Simulation(scene(body, duration=0.05, gravity=gravity, mu=0.9))
+    calls = []
+    summary = cut.run(stop=lambda: calls.append(cut.time) and False)
+    assert not summary.interrupted
+    assert len(calls) >= 40  # one call per solve (50 segment ends), not one for the run
+    np.testing.assert_array_equal(cut.pos, whole.pos)
+    np.testing.assert_array_equal(cut.vel, whole.vel)
