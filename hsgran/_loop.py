@@ -758,7 +758,8 @@ def _loop_of(grav_on):
             elif r != GO_ON:
                 return r
             popped += 1
-            if popped >= max_events or isc[I_VISITS] >= visits_end:
+            # (cluster solves come only with gravity: the free loop has no such compare)
+            if popped >= max_events or (grav_on and isc[I_VISITS] >= visits_end):
                 return STATUS_BUDGET
 
     return run_loop
