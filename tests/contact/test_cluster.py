@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from hsgran.contact.cluster import (
+    ANDERSON_AFTER,
+    ANDERSON_MEMORY,
     FRICTION_SWEEPS,
     MAX_SWEEPS,
     STALL_SWEEPS,
@@ -49,10 +51,10 @@ class Cluster:
                           np.asarray(slip, float), mur, reff))
 
     def solve(self, rotation=True, friction=True, rolling=False, warm=None, friction_sweeps=None,
-              stall=False, max_sweeps=MAX_SWEEPS):
+              stall=False, max_sweeps=MAX_SWEEPS, memory=ANDERSON_MEMORY):
         """Solve cold, or warm from ``warm`` = (pn, pt, hr) applied by ``start`` first; with
         ``friction_sweeps``, by ``solve_polished`` with that many tangential sweeps (and
-        ``stall`` as its ``grow``)."""
+        ``stall`` as its ``grow``); ``memory`` 0: plain Gauss–Seidel (``solve`` only)."""
         nc = len(self.rows)
         col = list(zip(*self.rows, strict=True))
         self.pn = np.zeros(nc)
@@ -70,7 +72,7 @@ class Cluster:
                 self.v, self.w, self.pn, self.pt, self.hr, rotation, friction, rolling,
                 SOLVE_TOL)
         if friction_sweeps is None:
-            sweeps, worst, self.stalled = solve(*args, max_sweeps, stall)
+            sweeps, worst, self.stalled = solve(*args, max_sweeps, stall, memory)
         else:
             sweeps, worst, self.stalled = solve_polished(*args, friction_sweeps, stall)
         self.sweeps = sweeps
@@ -376,3 +378,40 @@ def _column(n):
     for k in range(1, n):
         c.contact(k, k - 1, (0, 0, 1), mu=0.5)
     return c
+
+
+@pytest.mark.parametrize("n", [5, 20])
+def test_anderson_acceleration_finds_a_columns_forces_in_far_fewer_sweeps(n):
+    """A column of n spheres on a plate (force level): plain Gauss–Seidel needs sweeps of the
+    order of n² (the weight reaches the plate one contact per sweep, and back); with Anderson's
+    combination after ANDERSON_AFTER sweeps the same forces, contact k carrying the weight of
+    the n − k spheres above it, come in a fraction of them (measured: 5 spheres 330 → 37
+    sweeps; 20 spheres 5,197 → 181)."""
+    plain, fast = _column(n), _column(n)
+    assert plain.solve(memory=0) <= SOLVE_TOL
+    assert fast.solve() <= SOLVE_TOL
+    weight = M * G * (n - np.arange(n))
+    np.testing.assert_allclose(plain.pn, weight, rtol=TOL)
+    np.testing.assert_allclose(fast.pn, weight, rtol=TOL)
+    np.testing.assert_allclose(fast.v, 0.0, atol=n * SOLVE_TOL)
+    assert plain.sweeps > 4 * ANDERSON_AFTER
+    assert fast.sweeps < plain.sweeps / 8
+
+
+def test_a_small_cluster_is_solved_as_before_the_acceleration():
+    """A solve that converges within ANDERSON_AFTER sweeps never starts the acceleration: the
+    results are those of plain Gauss–Seidel, bit for bit (a sphere sliding on a plate into a
+    wall, with friction at both contacts)."""
+    runs = []
+    for memory in (0, ANDERSON_MEMORY):
+        c = Cluster(1)
+        c.v[0] = (-0.3, 0.1, 0.0)
+        c.contact(0, -1, (0, 0, 1), mu=0.3)
+        c.contact(0, -1, (1, 0, 0), target=0.18, mu=0.3)
+        c.solve(memory=memory)
+        runs.append(c)
+    assert runs[0].sweeps < ANDERSON_AFTER
+    assert runs[1].sweeps == runs[0].sweeps
+    np.testing.assert_array_equal(runs[0].v, runs[1].v)
+    np.testing.assert_array_equal(runs[0].w, runs[1].w)
+    np.testing.assert_array_equal(runs[0].pt, runs[1].pt)
