@@ -526,8 +526,9 @@ def _accelerated(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, i
         _combine(hist, x, g, f, dg, df, gram)
         largest = 0.0
         for i in range(n):
-            largest = max(largest, abs(x[i]))
-        if largest * EPS > ANDERSON_RESOLVE * tol:
+            if not abs(x[i]) <= largest:  # (a NaN, from a singular least-squares problem, too)
+                largest = abs(x[i])
+        if not largest * EPS <= ANDERSON_RESOLVE * tol:
             # beyond what the change test can see: go on from the plain sweep's result
             hist = 0
             slot = 0
