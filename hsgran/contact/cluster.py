@@ -36,6 +36,7 @@ import math
 import numpy as np
 
 from hsgran._jit import njit
+from hsgran.motion import ROUNDOFF
 
 #: Sweeps of Gauss–Seidel after which the solver stops even if it has not converged. Clusters of
 #: a pile (tens to a few hundred contacts) converge in tens to hundreds of sweeps; chains of
@@ -105,13 +106,11 @@ ANDERSON_REG = 1e-12
 ANDERSON_PATIENCE = 2 * ANDERSON_MEMORY
 #: A combination is dropped (and the history with it) where one of its impulses, in the
 #: velocity it makes, is so large that a change of ``tol`` would be less than
-#: ANDERSON_RESOLVE units in its last place (EPS of it) [-]: the change test could no longer
+#: ANDERSON_RESOLVE units in its last place (ROUNDOFF of it) [-]: the change test could no longer
 #: see that such a point is not a solution. (Where the problem has no solution, the
 #: least-squares combination ran off to impulses 10¹¹ times the real ones, at which a sweep's
 #: changes vanished in rounding and the test passed.)
 ANDERSON_RESOLVE = 1.0
-#: Relative rounding of a float64 [-].
-EPS = 2.220446049250313e-16
 
 
 @njit(inline="always")
@@ -528,7 +527,7 @@ def _accelerated(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, i
         for i in range(n):
             if not abs(x[i]) <= largest:  # (a NaN, from a singular least-squares problem, too)
                 largest = abs(x[i])
-        if not largest * EPS <= ANDERSON_RESOLVE * tol:
+        if not largest * ROUNDOFF <= ANDERSON_RESOLVE * tol:
             # beyond what the change test can see: go on from the plain sweep's result
             hist = 0
             slot = 0
