@@ -306,14 +306,23 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
     if c4 == 0.0:
         return pair_contact_before(rx, ry, rz, wx, wy, wz, sigma, horizon, v_sum, x_sum)
     if horizon < NEVER:
-        # out of reach before the horizon: |r + wτ + ½aτ²| ≥ |r| − |w|τ − ½|a|τ² stays above σ,
-        # by a margin that keeps f positive in rounding too, so the search below would find
-        # nothing either (the search costs two powers and a few hundred polynomial
-        # evaluations; what skipping it saves on settling pours: docs/performance.md)
-        reach = horizon * (math.sqrt(wx * wx + wy * wy + wz * wz)
-                           + horizon * math.sqrt(c4))  # (√c4 = ½|a|)
-        if math.sqrt(c0 + s2) - reach > sigma * (1.0 + OUT_OF_REACH_MARGIN):
-            return NEVER
+        # out of reach before the horizon: the distance is at least its projection on the
+        # separation now, |r + wτ + ½aτ²| ≥ |r| + (r̂·w)τ + ½(r̂·a)τ², and over [0, horizon]
+        # that is at least |r| − h (max(0, −r̂·w) + ½ h max(0, −r̂·a)); where this stays
+        # above σ, by a margin that keeps f positive in rounding too, the search below would
+        # find nothing either (the search costs two powers and a few hundred polynomial
+        # evaluations; what skipping it saves on settling pours and sliding beds:
+        # docs/performance.md). Only the approaching parts of w and a count: spheres that
+        # pass each other side by side are skipped too (|w| and |a| in full, the bound
+        # before 2026-11-28, kept them)
+        d = math.sqrt(c0 + s2)
+        out = sigma * (1.0 + OUT_OF_REACH_MARGIN)
+        if d > out:
+            close_v = -(rx * wx + ry * wy + rz * wz) / d
+            close_a = -(rx * ax + ry * ay + rz * az) / d
+            reach = horizon * (max(close_v, 0.0) + 0.5 * horizon * max(close_a, 0.0))
+            if d - reach > out:
+                return NEVER
     # every real root lies within Fujiwara's bound (unlike Cauchy's, 1 + max|c_k|/c4, it stays
     # evaluable for a tiny c4: a relative acceleration of 4e-63 m/s² put Cauchy's at 1e125 s,
     # where the gap polynomial overflows)
