@@ -11,6 +11,7 @@ from hypothesis import strategies as st
 
 from hsgran.motion import (
     NEVER,
+    OUT_OF_REACH_MARGIN,
     approach_noise,
     cylinder_contact_time,
     pair_contact_accelerated,
@@ -227,8 +228,10 @@ def test_a_quartic_contact_skipped_as_out_of_reach_is_none_before_the_horizon():
     horizon (its distance stays above its projection on today's separation): whenever it says
     "none before the horizon", the full search (no horizon, nothing skipped) finds the first
     contact only after it, or never. 3000 random pairs near and far, passing side by side,
-    approaching and leaving."""
-    skipped_side_by_side = 0
+    approaching and leaving; among them the pairs this bound skips and the bound before
+    2026-11-28 (|w| and |a| in full) did not."""
+    out = 1.0 + OUT_OF_REACH_MARGIN
+    newly_skipped = 0
     for r, w, a, sigma, h in _out_of_reach_cases(3000, 11):
         tau = pair_contact_accelerated(*r, *w, *a, sigma, h)
         full = pair_contact_accelerated(*r, *w, *a, sigma, NEVER)
@@ -236,8 +239,12 @@ def test_a_quartic_contact_skipped_as_out_of_reach_is_none_before_the_horizon():
             assert full > h, (r, w, a, h, full)
         else:
             assert tau <= h
-        # the pairs the bound before 2026-11-28 (|w| and |a| in full) could not skip
         d = np.linalg.norm(r)
-        if tau == NEVER and d - h * (np.linalg.norm(w) + 0.5 * h * np.linalg.norm(a)) <= sigma:
-            skipped_side_by_side += 1
-    assert skipped_side_by_side > 0
+        skip = d - h * (max(-(r @ w) / d, 0.0) + 0.5 * h * max(-(r @ a) / d, 0.0)) > sigma * out
+        old_skip = d - h * (np.linalg.norm(w) + 0.5 * h * np.linalg.norm(a)) > sigma * out
+        assert skip or not old_skip  # the projection never skips less
+        if skip:
+            assert tau == NEVER
+            assert full > h, (r, w, a, h, full)
+            newly_skipped += not old_skip
+    assert newly_skipped > 100
