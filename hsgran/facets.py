@@ -31,6 +31,7 @@ from hsgran.motion import (
     NEVER,
     _first_fall,
     cylinder_contact_time,
+    gap_at_start,
     pair_contact_accelerated,
     pair_contact_before,
     upward_root,
@@ -184,7 +185,8 @@ def edge_contact_time(qx, qy, qz, ux, uy, uz, gx, gy, gz, s0, s1, s2, r, half, h
     bound = 2.0 * max(abs(c3) / c4, (abs(c2) / c4) ** 0.5, (abs(c1) / c4) ** (1.0 / 3.0),
                       (0.5 * abs(c0) / c4) ** 0.25)
     # (met at τ = 0, touching: the next crossing lies beyond the piece it starts)
-    again = _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, r * r, 1.0, c4, c3, c2, c1,
+    again = _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, gap_at_start(qx, qy, qz, r), 1.0,
+                        c4, c3, c2, c1,
                         min(horizon, bound), tau == 0.0, tau)
     if again < NEVER and abs(s0 + again * (s1 + 0.5 * s2 * again)) <= half:
         return again

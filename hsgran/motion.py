@@ -181,11 +181,11 @@ def face_exit_time(x, v, g, lo, hi):
     return t_lo, -1
 
 
-#: Iterations of the bracketed Newton–bisection root search; each halves the bracket at worst,
-#: and the doubles span 2^2098 from the largest to the smallest, so 2200 reach the width of one
-#: unit in the last place from any finite bracket (the search stops there; a well-scaled
-#: bracket takes ~60). 200 were not enough for a bracket of 1e62 s (a relative acceleration
-#: of 4e-63 m/s², found by the property test).
+#: Halvings of a bracket that reach the width of one unit in the last place from any finite
+#: bracket: the doubles span 2^2098 from the largest to the smallest (bisection of a
+#: well-scaled bracket takes ~60; 200 were not enough for a bracket of 1e62 s, a relative
+#: acceleration of 4e-63 m/s², found by the property test). :func:`_bracketed_root`, which
+#: halves its bracket at least every fourth point, asks at most 4 ROOT_MAX_ITER points.
 ROOT_MAX_ITER = 2200
 
 
@@ -196,18 +196,73 @@ ROOT_MAX_ITER = 2200
 OUT_OF_REACH_MARGIN = 1e-9
 
 
+#: Units of round-off of the estimate by which a step of :func:`_bracketed_root` is carried
+#: past it, away from the point it started from [-] (doubled for every further point on the
+#: same side). Newton-type steps close in on a root from one side, so the bracket's far end
+#: would come in only by bisection (~60 halvings to adjacent doubles); once a step lands
+#: within a unit or two of the root, the nudge puts the next point on the root's other side
+#: and the bracket collapses to a few units, which a halving or two finish. Far from the root
+#: it changes the step by nothing that matters.
+NEWTON_NUDGE_ULPS = 1.0
+
+
+#: Dekker's splitting constant for doubles, 2^27 + 1 (Dekker 1971, Numer. Math. 18, 224): a
+#: double times it splits into two halves whose products are exact.
+_SPLIT = 134217729.0
+
+
 @njit(inline="always")
-def _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, t):
-    """f(t) = sgn (|r + w t + ½ a t²|² − σ²) and f'(t), evaluated from the displacement
-    (accurate near contact, unlike the expanded quartic); sgn = 1 for spheres apart, −1 for a
-    distance that must stay below σ (a sphere inside a cylinder)."""
-    dx = rx + t * (wx + 0.5 * ax * t)
-    dy = ry + t * (wy + 0.5 * ay * t)
-    dz = rz + t * (wz + 0.5 * az * t)
+def _square(a):
+    """a² as p + e exactly (p the rounded square, e its rounding error; Dekker's product)."""
+    c = _SPLIT * a
+    hi = c - (c - a)
+    lo = a - hi
+    p = a * a
+    return p, ((hi * hi - p) + 2.0 * hi * lo) + lo * lo
+
+
+@njit(inline="always")
+def _two_sum(a, b):
+    """a + b as s + e exactly (Knuth's two-sum)."""
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+@njit
+def gap_at_start(rx, ry, rz, sigma):
+    """f(0) = |r|² − σ² [m²], the squares and their sum compensated (:func:`_square`,
+    :func:`_two_sum`): accurate to round-off of f(0) itself, where the plain sum carries the
+    round-off of |r|² and σ² (~1e-16 σ²), which, for two spheres 1e-5 σ apart that close at
+    1 mm/s, moves their contact time by ~1e-16 s, and for a grazing pair by far more. The
+    root search measures f from it (:func:`_gap_poly`)."""
+    px, ex = _square(rx)
+    py, ey = _square(ry)
+    pz, ez = _square(rz)
+    ps, es = _square(sigma)
+    s, e1 = _two_sum(px, py)
+    s, e2 = _two_sum(s, pz)
+    s, e3 = _two_sum(s, -ps)
+    return s + ((e1 + e2 + e3) + (ex + ey + ez - es))
+
+
+@njit(inline="always")
+def _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t):
+    """f(t) = sgn (|r + w t + ½ a t²|² − σ²) and f'(t), from f0 = |r|² − σ² and the
+    displacement D = w t + ½ a t² as f0 + 2 r·D + |D|²: near contact D is small, so f carries
+    the rounding of f0 (fixed, the same at every t) and of terms of order |r||D|, not the
+    rounding of |r + D|² (~1e-16 σ², which scattered f's sign over ~10⁴ doubles around a root
+    that a sphere approaching at 1 mm/s through a gap of 1e-5 σ reaches); unlike the expanded
+    quartic, it has no cancelling coefficients. sgn = 1 for spheres apart, −1 for a distance
+    that must stay below σ (a sphere inside a cylinder)."""
+    px = t * (wx + 0.5 * ax * t)
+    py = t * (wy + 0.5 * ay * t)
+    pz = t * (wz + 0.5 * az * t)
+    f = f0 + (2.0 * (rx * px + ry * py + rz * pz) + (px * px + py * py + pz * pz))
     ux = wx + ax * t
     uy = wy + ay * t
     uz = wz + az * t
-    return sgn * (dx * dx + dy * dy + dz * dz - s2), sgn * 2.0 * (dx * ux + dy * uy + dz * uz)
+    return sgn * f, sgn * 2.0 * ((rx + px) * ux + (ry + py) * uy + (rz + pz) * uz)
 
 
 @njit(inline="always")
@@ -216,55 +271,130 @@ def _dpoly(c4, c3, c2, c1, t):
     return ((4.0 * c4 * t + 3.0 * c3) * t + 2.0 * c2) * t + c1
 
 
+@njit(inline="always")
+def _value_slope(cubic, c4, c3, c2, c1, rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t):
+    """What :func:`_bracketed_root` searches, and its first and second derivatives, at t: f' of
+    the expanded quartic, f'' and its derivative (``cubic``), or f, f' (:func:`_gap_poly`) and
+    f''."""
+    if cubic:
+        return (_dpoly(c4, c3, c2, c1, t), (12.0 * c4 * t + 6.0 * c3) * t + 2.0 * c2,
+                24.0 * c4 * t + 6.0 * c3)
+    f, df = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t)
+    # f'' = 2 (|u|² + d·a), u = w + a t, d = r + w t + ½ a t²
+    ux, uy, uz = wx + ax * t, wy + ay * t, wz + az * t
+    d_a = ((rx + t * (wx + 0.5 * ax * t)) * ax + (ry + t * (wy + 0.5 * ay * t)) * ay
+           + (rz + t * (wz + 0.5 * az * t)) * az)
+    return f, df, sgn * 2.0 * (ux * ux + uy * uy + uz * uz + d_a)
+
+
+@njit(inline="always")
+def _model_step(g, g1, g2, right):
+    """The step s to the nearest zero of the local model g + g1 s + ½ g2 s² on the side where
+    the root lies (s ≥ 0 where ``right``, else s ≤ 0; 0 where g is 0, and the caller's nudge
+    moves the point); Newton's −g/g1 where the model has no zero there; NaN where neither
+    points that way."""
+    disc = g1 * g1 - 2.0 * g2 * g
+    best = math.nan
+    half = 0.5 * g2  # (tested itself: half of a subnormal g2 may be 0)
+    if half != 0.0 and disc >= 0.0:
+        q = -0.5 * (g1 + math.copysign(math.sqrt(disc), g1))  # (the roots without cancelling)
+        if q != 0.0:
+            for s in (q / half, g / q):
+                if (s >= 0.0 if right else s <= 0.0) and not abs(s) >= abs(best):
+                    best = s
+        if best == best:
+            return best
+    s = -g / g1 if g1 != 0.0 else math.nan
+    return s if (s >= 0.0 if right else s <= 0.0) else math.nan
+
+
+# long: one bracketed search, shared by the two functions it finds roots of; split, the
+# bracket's state would travel between functions as tuples
 @njit
-def _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, lo, hi):
-    """Root of f in [lo, hi] where f(lo) > 0 ≥ f(hi) and f is monotone: safeguarded Newton."""
-    for _ in range(ROOT_MAX_ITER):
+def _bracketed_root(cubic, c4, c3, c2, c1, rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, lo, hi,
+                    flo, fhi):
+    """The two adjacent doubles (lo, hi) between which g changes sign, on [lo, hi] where g is
+    monotone: g(lo) on one side of zero (``flo``: its value, "side" meaning > 0 or not), g(hi)
+    (``fhi``) on the other; g is f' of the expanded quartic (``cubic``, coefficients c4 … c1)
+    or f (:func:`_gap_poly`, from f0).
+
+    Bisection would ask the sign of g ~60 times; this asks it 5–10 times (98 % of the searches
+    of a settling pour). Each point is followed by a step to the zero of g's local quadratic
+    model (Chebyshev's method, third order; near a critical point of f, where g is flat and
+    Newton's steps only halve the distance, it lands at once). A bisection is taken instead
+    where the step has no zero to go to, lands further than the bracket's width outside it,
+    or the bracket has not halved over the last three points (the safeguard that keeps the
+    search at least as fast as bisection, as Press et al.'s "rtsafe" does with its steps'
+    lengths). Such steps close in on the root from one side, so each is carried
+    NEWTON_NUDGE_ULPS units of round-off past its estimate (doubling while points keep
+    falling on the same side; just inside the bracket's far end where the estimate is at or
+    past it), which brings the far end in too. Where g's sign, as computed, changes only once
+    on the bracket, the pair is the one bisection finds."""
+    up = flo > 0.0
+    t = lo
+    # the bracket's width after each of the last three points: a point that leaves it wider
+    # than half the width three points before is followed by a bisection, so the bracket
+    # halves at least every fourth point, which 4 ROOT_MAX_ITER bounds
+    w1 = w2 = w3 = math.inf
+    nudge = NEWTON_NUDGE_ULPS
+    side = True  # the side the last point fell on (True: lo's)
+    for _ in range(4 * ROOT_MAX_ITER):
+        g, g1, g2 = _value_slope(cubic, c4, c3, c2, c1, rx, ry, rz, wx, wy, wz, ax, ay, az, f0,
+                                 sgn, t)
+        at_lo = (g > 0.0) == up
+        if at_lo:
+            lo = t
+        else:
+            hi = t
         mid = 0.5 * (lo + hi)
         if not (lo < mid < hi):
             break
-        f, df = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, mid)
-        if f > 0.0:
-            lo = mid
-        else:
-            hi = mid
-        # a Newton step from the better end, kept only if it stays inside the bracket
-        if df < 0.0:
-            t = mid - f / df
-            if lo < t < hi:
-                ft, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, t)
-                if ft > 0.0:
-                    lo = t
-                else:
-                    hi = t
+        width = hi - lo
+        slow = width > 0.5 * w3
+        w3, w2, w1 = w2, w1, width
+        nxt = t + _model_step(g, g1, g2, at_lo)
+        if slow or not lo - width < nxt < hi + width:  # (a NaN step too)
+            t = mid
+            continue
+        # a point on the same side as the last one: the nudge doubles until one crosses
+        nudge = 2.0 * nudge if at_lo == side else NEWTON_NUDGE_ULPS
+        side = at_lo
+        e = nudge * ROUNDOFF * abs(nxt)
+        # just past the estimate; where that is at or past the far end, just inside it (the
+        # far end has come to the root: the next point must fall on the root's other side)
+        t = min(nxt + e, hi - e) if at_lo else max(nxt - e, lo + e)
+        if not lo < t < hi:
+            t = mid
+    return lo, hi
+
+
+@njit(inline="always")
+def _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, lo, hi, flo, fhi):
+    """Root of f in [lo, hi] where f(lo) = flo > 0 ≥ f(hi) = fhi and f is monotone: the first
+    double at which f is not above zero (:func:`_bracketed_root`)."""
+    _, hi = _bracketed_root(False, 0.0, 0.0, 0.0, 0.0, rx, ry, rz, wx, wy, wz, ax, ay, az, f0,
+                            sgn, lo, hi, flo, fhi)
     return hi
 
 
 @njit(inline="always")
-def _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, b):
+def _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a, b):
     """(True, root) if f falls through zero on [a, b], a piece where it is monotone; else
     (False, inf)."""
-    fa, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a)
-    fb, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, b)
+    fa, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a)
+    fb, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, b)
     if fa > 0.0 and fb <= 0.0:
-        return True, _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, b)
+        return True, _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a, b, fa, fb)
     return False, NEVER
 
 
-@njit
-def _dpoly_root(c4, c3, c2, c1, lo, hi):
-    """A root of f' in [lo, hi] where f' changes sign (bisection; f' is monotone there)."""
-    flo = _dpoly(c4, c3, c2, c1, lo)
-    for _ in range(ROOT_MAX_ITER):
-        mid = 0.5 * (lo + hi)
-        if not (lo < mid < hi):
-            break
-        fm = _dpoly(c4, c3, c2, c1, mid)
-        if (fm > 0.0) == (flo > 0.0):
-            lo = mid
-            flo = fm
-        else:
-            hi = mid
+@njit(inline="always")
+def _dpoly_root(c4, c3, c2, c1, lo, hi, flo, fhi):
+    """A root of f' in [lo, hi] where f' changes sign (f'(lo) = flo, f'(hi) = fhi; f' is
+    monotone there): the middle of the two adjacent doubles it changes sign between
+    (:func:`_bracketed_root`)."""
+    lo, hi = _bracketed_root(True, c4, c3, c2, c1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+                             0.0, 0.0, lo, hi, flo, fhi)
     return 0.5 * (lo + hi)
 
 
@@ -277,9 +407,12 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
     the separation is r + w τ + ½ a τ² with a the difference of the accelerations, and
     f(τ) = |r + wτ + ½aτ²|² − σ² is a quartic. Its first downward zero crossing is bracketed
     between critical points (the zeros of f', themselves bracketed by the zeros of f'', a
-    quadratic) and found by safeguarded Newton–bisection, which stays robust at grazing
-    contacts and double roots where closed-form quartic formulas lose all accuracy
-    (docs/architecture.md §3).
+    quadratic) and found by a bracketed search (third-order steps safeguarded by bisection,
+    :func:`_bracketed_root`) on f measured from f(0), summed exactly, and the displacement
+    (:func:`_gap_poly`), which stays robust at grazing contacts and double roots where
+    closed-form quartic formulas lose all accuracy (docs/architecture.md §3), and finds the
+    root to a few units of round-off times the crossing's conditioning
+    (tests/test_motion.py).
 
     Args:
         rx, ry, rz: Separation x_i − x_j [m].
@@ -340,7 +473,8 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
         noise = 2.0 * approach_noise(sigma, v_sum, x_sum)
         if c1 < -noise or (c2 < 0.0 and c1 <= noise):
             return 0.0
-    tau = _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, 1.0, c4, c3, c2, c1, h, touching)
+    tau = _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, gap_at_start(rx, ry, rz, sigma), 1.0,
+                      c4, c3, c2, c1, h, touching)
     if tau == NEVER and c0 < 0.0 and (c2 < 0.0 or c3 < 0.0):
         # (with c2, c3 ≥ 0 and c4 > 0, f' > 0 for τ > 0: a pair that separates never comes back,
         # which is most touching pairs after a collision)
@@ -351,10 +485,11 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
 # long: one walk over the pieces of a quartic, bracketing at each step; split, the pieces'
 # bounds would travel between functions as tuples
 @njit
-def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, c4, c3, c2, c1, h, touching,
+def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, c4, c3, c2, c1, h, touching,
                 after=0.0):
     """First τ in [0, h] where f = sgn (|r + wτ + ½aτ²|² − σ²) (coefficients c4 … c1 of τ⁴ …
-    τ, sign included) falls through zero; ``inf`` if none. ``touching``: f(0) is round-off, so
+    τ, sign included; f0 = |r|² − σ² without the sign, :func:`gap_at_start`) falls through
+    zero; ``inf`` if none. ``touching``: f(0) is round-off, so
     the piece from τ = 0 is not searched. ``after``: a crossing already found; only the
     pieces that start at or after it are searched (the next crossing, hsgran.facets)."""
     # critical points of f' (zeros of f'' = 12 c4 τ² + 6 c3 τ + 2 c2) split [0, h] into up to
@@ -389,15 +524,15 @@ def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, c4, c3, c2, c1, h, 
         flo = _dpoly(c4, c3, c2, c1, lo)
         fhi = _dpoly(c4, c3, c2, c1, hi)
         if (flo > 0.0) != (fhi > 0.0) and flo != 0.0 and fhi != 0.0:
-            b = _dpoly_root(c4, c3, c2, c1, lo, hi)
+            b = _dpoly_root(c4, c3, c2, c1, lo, hi, flo, fhi)
             if b > a and a >= after and not (touching and first):
-                found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, b)
+                found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a, b)
                 if found:
                     return tau
             a = b
             first = False
     if h > a and a >= after and not (touching and first):
-        found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, s2, sgn, a, h)
+        found, tau = _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a, h)
         if found:
             return tau
     return NEVER
@@ -412,13 +547,11 @@ DISTANCE_ROUNDING_ULPS = 8
 @njit
 def _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, sgn, c4, c3, c2, c1, h):
     """A pair overlapping by round-off (f(0) < 0) whose f crosses zero nowhere in [0, h]: the
-    first τ where f falls back to f(0) (the distance it has now), or, where f's rise is below
-    the rounding of the distance, the first τ where f starts to fall (f' from + to −, from the
-    coefficients); ``inf`` if neither (see :func:`pair_contact_accelerated`). [OURS]"""
+    first τ where f starts to fall (f' from + to −, from the coefficients) where f's rise to
+    there is below the rounding of the distance, else the first τ where f falls back to f(0)
+    (the distance it has now); ``inf`` if neither (see :func:`pair_contact_accelerated`).
+    [OURS]"""
     rr = rx * rx + ry * ry + rz * rz
-    tau = _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, rr, sgn, c4, c3, c2, c1, h, True)
-    if tau < NEVER:
-        return tau
     # the first peak: the zeros of f'' (a quadratic) inside (0, h) split it into pieces where
     # f' is monotone (scalars: kernels do not allocate, see hsgran._jit)
     qa, qb, qc = 12.0 * c4, 6.0 * c3, 2.0 * c2
@@ -433,14 +566,19 @@ def _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, sgn, c4, c3, c2, c1, h):
         q1, q2 = min(q1, q2), max(q1, q2)
     lo = 0.0
     for hi in (q1, q2, h):
-        if hi > lo and _dpoly(c4, c3, c2, c1, lo) > 0.0 >= _dpoly(c4, c3, c2, c1, hi):
-            top = _dpoly_root(c4, c3, c2, c1, lo, hi)
-            # only an excursion lost in the rounding of |d|²: a larger one that comes back
-            # after h (the horizon) is no contact before it
+        flo = _dpoly(c4, c3, c2, c1, lo)
+        fhi = _dpoly(c4, c3, c2, c1, hi)
+        if hi > lo and flo > 0.0 >= fhi:
+            top = _dpoly_root(c4, c3, c2, c1, lo, hi, flo, fhi)
+            # an excursion lost in the rounding of |d|²: met at its peak (f, measured from the
+            # displacement, resolves far smaller ones than the positions do)
             rise = top * (c1 + top * (c2 + top * (c3 + top * c4)))
             if rise <= DISTANCE_ROUNDING_ULPS * ROUNDOFF * rr:
                 return top
-            return NEVER
+            # a larger one: where it comes back to the distance it has now (f from it: f(0) =
+            # 0), or never before the horizon
+            return _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, 0.0, sgn, c4, c3, c2, c1, h,
+                               True)
         lo = max(lo, hi)
     return NEVER
 
@@ -499,8 +637,8 @@ def cylinder_contact_time(qx, qy, qz, ux, uy, uz, gx, gy, gz, rho, side, horizon
     ac4 = abs(c4)
     bound = 2.0 * max(abs(c3) / ac4, math.sqrt(abs(c2) / ac4), (abs(c1) / ac4) ** (1.0 / 3.0),
                       (0.5 * abs(c0) / ac4) ** 0.25)
-    tau = _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, s2, sgn, c4, c3, c2, c1,
-                      min(horizon, bound), touching)
+    tau = _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, gap_at_start(qx, qy, qz, rho), sgn,
+                      c4, c3, c2, c1, min(horizon, bound), touching)
     if tau == NEVER and c0 < 0.0:  # overlapping (see pair_contact_accelerated)
         return _way_back(qx, qy, qz, ux, uy, uz, gx, gy, gz, sgn, c4, c3, c2, c1,
                          min(horizon, bound))

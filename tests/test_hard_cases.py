@@ -298,6 +298,11 @@ def assert_at_rest_in_the_box_without_overlap(scene, sim):
     """Every sphere at rest, inside the box and overlapping nothing beyond OVERLAP_REL."""
     assert (sim.mstate == MS_REST).all()
     np.testing.assert_array_equal(sim.vel, 0.0)
+    assert_in_the_box_without_overlap(scene, sim)
+
+
+def assert_in_the_box_without_overlap(scene, sim):
+    """Every sphere inside the box and overlapping nothing beyond OVERLAP_REL."""
     lo, hi = scene.box_lower, scene.box_upper
     r = scene.radius[:, None]
     assert (sim.pos - r >= lo - OVERLAP_REL * r).all()
@@ -396,6 +401,12 @@ CHAIN = {"scene.seed": 1, "scene.effects": ["gravity", "rotation", "friction",
 
 #: Collisions the variant pours may take to 1 s (measured up to ~2e6).
 VARIANT_MAX_COLLISIONS = 6_000_000
+#: Seeds each variant may be poured with, from its own on, until one needs the wedge rule [-].
+#: Which pour of a variant needs the rule depends on the rounding of every contact time before
+#: it: when the quartic's root search was made exact to round-off (2026-11-28), the chain's
+#: stops moved from seed 1 (281 stops; now none) to seed 2 (30 → 160), and each of seeds 1–8
+#: still ran to its end. The rule is asked of the variant's pours, not of one trajectory.
+VARIANT_SEEDS = 3
 
 
 @pytest.mark.skipif(numba.config.DISABLE_JIT, reason="a pour takes seconds compiled, hours "
@@ -403,17 +414,30 @@ VARIANT_MAX_COLLISIONS = 6_000_000
 @pytest.mark.parametrize("over", [POCKET, POCKET_ROUNDING, CHAIN],
                          ids=["pocket_on_the_floor", "pocket_apart_by_rounding", "chain"])
 def test_pour_variants_with_wedged_spheres_settle(over):
-    scene = load_scene(SMALL_POUR, overrides=over)
-    # a collision budget (measured: at most 2e6 to 1 s), so that an endless loop fails the
-    # test instead of hanging it
-    sim, summary, ev = run_logged(scene, max_collisions=VARIANT_MAX_COLLISIONS)
-    assert sim.time == scene.duration
-    assert summary.events["wedge"] >= 1
-    stops = ev.kind == EV_WEDGE
-    assert stops.sum() == summary.events["wedge"]  # each stop is in the event log
+    wedges = 0
+    on_floor = False
+    frictional = "friction" in over["scene.effects"]
+    for k in range(VARIANT_SEEDS):
+        scene = load_scene(SMALL_POUR, overrides={**over, "scene.seed": over["scene.seed"] + k})
+        # a collision budget (measured: at most 2e6 to 1 s), so that an endless loop fails the
+        # test instead of hanging it
+        sim, summary, ev = run_logged(scene, max_collisions=VARIANT_MAX_COLLISIONS)
+        assert sim.time == scene.duration
+        stops = ev.kind == EV_WEDGE
+        assert stops.sum() == summary.events["wedge"]  # each stop is in the event log
+        wedges += summary.events["wedge"]
+        on_floor |= bool((ev.stage[stops] == MS_REST).any())
+        if k == 0 or frictional:
+            assert_at_rest_in_the_box_without_overlap(scene, sim)
+        else:
+            # without friction a sphere left sliding on the floor has nothing to stop it (seed
+            # 3 of the pocket kept one at 3e-4 m/s at 1 s before 2026-11-28 too)
+            assert_in_the_box_without_overlap(scene, sim)
+        if wedges:
+            break
+    assert wedges >= 1
     if over is POCKET:
-        assert (ev.stage[stops] == MS_REST).any()  # stopped on the floor, not in flight
-    assert_at_rest_in_the_box_without_overlap(scene, sim)
+        assert on_floor  # stopped on the floor, not in flight
 
 
 @pytest.mark.slow
