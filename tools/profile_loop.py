@@ -16,8 +16,12 @@ samples, and inlining it by hand changed nothing): check a lead with an A/B of t
 build.
 
 The loop is compiled with ``NUMBA_ENABLE_PROFILING=1`` (debug information) into its own cache
-directory (``--cache``, default /tmp/hsgran-profile-cache; a cold compile takes a minute or
-two the first time), so the ordinary cache is left alone. Needs ``perf`` (Debian package
+directory (under ``--cache``, default /tmp/hsgran-profile-cache; a cold compile takes a minute
+or two the first time), so the ordinary cache is left alone. Like the ordinary cache
+(hsgran._jit), it is named after a hash of the package's sources: numba keys a cached function
+on its own file only, so after an edit of hsgran/motion.py the loop of hsgran/_loop.py, which
+inlines it, would load stale, with the old functions' names (a profile of 2026-11-28 showed
+functions that no longer existed). Needs ``perf`` (Debian package
 linux-perf) and permission to sample user code (perf_event_paranoid ≤ 2).
 
 What it has found is recorded in docs/performance.md (numba's reference counting, see
@@ -162,16 +166,19 @@ def main(argv=None) -> int:
     else:
         loop, amount, first = "run_loop_free", float(round(args.collisions)), 1.0
         what = f"elastic gas, N = {n:,}, warm-up and {round(args.collisions):,} collisions"
+    from hsgran._jit import _source_digest
+
+    cache = args.cache / _source_digest()
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "addresses.json"
         perf_data = Path(tmp) / "perf.data"
-        print(f"# compiling (or loading) the loop with debug information in {args.cache}",
+        print(f"# compiling (or loading) the loop with debug information in {cache}",
               flush=True)
         out.write_text(json.dumps({"names": []}))
-        _run_child(n, first, scene, args.cache, out, None)
-        symbols = _library_symbols(args.cache, loop)
+        _run_child(n, first, scene, cache, out, None)
+        symbols = _library_symbols(cache, loop)
         out.write_text(json.dumps({"names": sorted(symbols)}))
-        _run_child(n, amount, scene, args.cache, out, perf_data)
+        _run_child(n, amount, scene, cache, out, perf_data)
         addresses = json.loads(out.read_text())["addresses"]
         script = subprocess.run(["perf", "script", "-i", str(perf_data), "-F", "ip"],
                                 capture_output=True, text=True, check=True).stdout
