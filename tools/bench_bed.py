@@ -19,15 +19,15 @@ Usage:
 from __future__ import annotations
 
 import argparse
-import math
 import pickle
+import sys
 import time
 from pathlib import Path
 
-SCENE = Path(__file__).resolve().parents[1] / "scenarios" / "chute.toml"
+from chute import chute_scene
 
 
-def main(argv=None) -> None:
+def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--angle", type=float, default=14.0, help="inclination [deg]")
     p.add_argument("--start", type=float, default=0.163,
@@ -39,18 +39,23 @@ def main(argv=None) -> None:
     a = p.parse_args(argv)
 
     from hsgran._state import I_SWEEPS, I_VISITS
-    from hsgran.engine import Simulation
+    from hsgran.engine import Simulation, SimulationError
     from hsgran.onplane import MS_SUPPORTED
-    from hsgran.scene import load_scene
 
-    th = math.radians(a.angle)
-    scene = load_scene(SCENE, overrides={
-        "scene.gravity": [9.81 * math.sin(th), 0.0, -9.81 * math.cos(th)],
-        "scene.duration": a.start + a.span})
-    sim = Simulation(scene)
+    sim = Simulation(chute_scene(a.angle, a.start + a.span))
     wall = time.perf_counter()
     if a.checkpoint is not None and a.checkpoint.exists():
-        sim.restore(pickle.loads(a.checkpoint.read_bytes()))
+        try:
+            state = pickle.loads(a.checkpoint.read_bytes())
+        except Exception as err:  # (any byte string may fail to unpickle in its own way)
+            print(f"bench_bed: --checkpoint {a.checkpoint}: not a checkpoint ({err})",
+                  file=sys.stderr)
+            return 2
+        try:
+            sim.restore(state)
+        except (SimulationError, AttributeError, TypeError) as err:  # (not a Checkpoint)
+            print(f"bench_bed: --checkpoint {a.checkpoint}: {err}", file=sys.stderr)
+            return 2
     else:
         sim.run(until=a.start)
         if a.checkpoint is not None:
@@ -64,12 +69,13 @@ def main(argv=None) -> None:
     for k in range(1, a.windows + 1):
         t = a.start + a.span * k / a.windows
         s = sim.run(until=t)
-        clusters += dict(s.events)["cluster"]
+        clusters += s.events["cluster"]
         print(f"{t:8.4f} {time.process_time() - cpu0:8.1f} "
               f"{int(sim.isc[I_SWEEPS]) - sweeps0:10.3g} {int(sim.isc[I_VISITS]) - visits0:10.3g} "
               f"{clusters:8d} {int((sim.mstate == MS_SUPPORTED).sum()):9d}")
     print(f"total: {time.process_time() - cpu0:.1f} s of CPU for {a.span} s of simulated time")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -34,19 +34,25 @@ D = 0.002  #: bead diameter [m]
 STOPPED = 1e-3  #: a mean speed below this is a stopped flow [m/s]
 
 
+def chute_scene(angle: float, duration: float):
+    """scenarios/chute.toml's scene with gravity (9.81 m/s²) tilted by ``angle`` degrees from the
+    vertical towards +x, run for ``duration`` seconds."""
+    from hsgran.scene import load_scene
+
+    th = math.radians(angle)
+    return load_scene(SCENE, overrides={
+        "scene.gravity": [9.81 * math.sin(th), 0.0, -9.81 * math.cos(th)],
+        "scene.duration": duration})
+
+
 def run_one(args) -> dict:
     """Run the chute at ``angle`` degrees for ``seconds`` of simulated time, or until
     ``timeout`` seconds of wall time (None: no limit); return its frames' figures and where
     it stopped early (the collapse guard, or the timeout)."""
     from hsgran.engine import Simulation, SimulationError
-    from hsgran.scene import load_scene
 
     angle, seconds, timeout = args
-    th = math.radians(angle)
-    scene = load_scene(SCENE, overrides={
-        "scene.gravity": [9.81 * math.sin(th), 0.0, -9.81 * math.cos(th)],
-        "scene.duration": seconds})
-    sim = Simulation(scene)
+    sim = Simulation(chute_scene(angle, seconds))
     frames = {"t": [], "vx": [], "z": [], "rest": []}
 
     class Keep:
