@@ -34,6 +34,7 @@ from hsgran.motion import (
     gap_at_start,
     pair_contact_accelerated,
     pair_contact_before,
+    root_horizon,
     upward_root,
 )
 from hsgran.wallspec import FC_E1, FC_E2, FC_HOLE, FC_LINES, FC_NHOLE, FC_NLINES
@@ -182,12 +183,10 @@ def edge_contact_time(qx, qy, qz, ux, uy, uz, gx, gy, gz, s0, s1, s2, r, half, h
     c2 = ux * ux + uy * uy + uz * uz + qx * gx + qy * gy + qz * gz
     c1 = 2.0 * (qx * ux + qy * uy + qz * uz)
     c0 = qx * qx + qy * qy + qz * qz - r * r
-    bound = 2.0 * max(abs(c3) / c4, (abs(c2) / c4) ** 0.5, (abs(c1) / c4) ** (1.0 / 3.0),
-                      (0.5 * abs(c0) / c4) ** 0.25)
     # (met at τ = 0, touching: the next crossing lies beyond the piece it starts)
     again = _first_fall(qx, qy, qz, ux, uy, uz, gx, gy, gz, gap_at_start(qx, qy, qz, r), 1.0,
-                        c4, c3, c2, c1,
-                        min(horizon, bound), tau == 0.0, tau)
+                        c4, c3, c2, c1, root_horizon(c4, c3, c2, c1, c0, horizon), tau == 0.0,
+                        tau)
     if again < NEVER and abs(s0 + again * (s1 + 0.5 * s2 * again)) <= half:
         return again
     return NEVER
