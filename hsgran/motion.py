@@ -248,13 +248,14 @@ def gap_at_start(rx, ry, rz, sigma):
 
 @njit(inline="always")
 def _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t):
-    """f(t) = sgn (|r + w t + ½ a t²|² − σ²) and f'(t), from f0 = |r|² − σ² and the
+    """f(t) = sgn (|r + w t + ½ a t²|² − σ²), f'(t) and f''(t), from f0 = |r|² − σ² and the
     displacement D = w t + ½ a t² as f0 + 2 r·D + |D|²: near contact D is small, so f carries
     the rounding of f0 (fixed, the same at every t) and of terms of order |r||D|, not the
     rounding of |r + D|² (~1e-16 σ², which scattered f's sign over ~10⁴ doubles around a root
     that a sphere approaching at 1 mm/s through a gap of 1e-5 σ reaches); unlike the expanded
     quartic, it has no cancelling coefficients. sgn = 1 for spheres apart, −1 for a distance
-    that must stay below σ (a sphere inside a cylinder)."""
+    that must stay below σ (a sphere inside a cylinder). Also f''(t) = 2 (|u|² + d·a), with
+    u = w + a t and d = r + D (the root search's local model, :func:`_bracketed_root`)."""
     px = t * (wx + 0.5 * ax * t)
     py = t * (wy + 0.5 * ay * t)
     pz = t * (wz + 0.5 * az * t)
@@ -262,7 +263,9 @@ def _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t):
     ux = wx + ax * t
     uy = wy + ay * t
     uz = wz + az * t
-    return sgn * f, sgn * 2.0 * ((rx + px) * ux + (ry + py) * uy + (rz + pz) * uz)
+    dx, dy, dz = rx + px, ry + py, rz + pz
+    return (sgn * f, sgn * 2.0 * (dx * ux + dy * uy + dz * uz),
+            sgn * 2.0 * (ux * ux + uy * uy + uz * uz + (dx * ax + dy * ay + dz * az)))
 
 
 @njit(inline="always")
@@ -279,12 +282,7 @@ def _value_slope(cubic, c4, c3, c2, c1, rx, ry, rz, wx, wy, wz, ax, ay, az, f0, 
     if cubic:
         return (_dpoly(c4, c3, c2, c1, t), (12.0 * c4 * t + 6.0 * c3) * t + 2.0 * c2,
                 24.0 * c4 * t + 6.0 * c3)
-    f, df = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t)
-    # f'' = 2 (|u|² + d·a), u = w + a t, d = r + w t + ½ a t²
-    ux, uy, uz = wx + ax * t, wy + ay * t, wz + az * t
-    d_a = ((rx + t * (wx + 0.5 * ax * t)) * ax + (ry + t * (wy + 0.5 * ay * t)) * ay
-           + (rz + t * (wz + 0.5 * az * t)) * az)
-    return f, df, sgn * 2.0 * (ux * ux + uy * uy + uz * uz + d_a)
+    return _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t)
 
 
 @njit(inline="always")
@@ -381,8 +379,8 @@ def _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, lo, hi, flo, fhi
 def _descent_in(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a, b):
     """(True, root) if f falls through zero on [a, b], a piece where it is monotone; else
     (False, inf)."""
-    fa, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a)
-    fb, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, b)
+    fa = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a)[0]
+    fb = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, b)[0]
     if fa > 0.0 and fb <= 0.0:
         return True, _first_descent(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, a, b, fa, fb)
     return False, NEVER
