@@ -235,6 +235,13 @@ def enter_plane(i, w, t, snap, flight, dyn, walls, gravity, pair_table, fsc, fri
     nx = planes_n[w, 0]
     ny = planes_n[w, 1]
     nz = planes_n[w, 2]
+    if gravity[0] * nx + gravity[1] * ny + gravity[2] * nz > 0.0:
+        # an overhanging plane (−g·n < 0) does not carry the sphere: gravity takes it away,
+        # and on-plane motion there would slide it along the plane with a negative load, its
+        # friction pushing instead of resisting (MODEL §5.3 assumes g_n > 0). A cluster solve
+        # that leaves the sphere one touching contact, with that plane, sends it here
+        leave_plane(i, flight, dyn, gravity, rotation)
+        return
     # exactly on the plane, moving along it: the normal gap and speed left are round-off or
     # (on landing) the rebound given up, bounded by the landing speed
     gap = plane_gap(st[i, 0], st[i, 1], st[i, 2], st[i, S_R], planes_p, planes_n, w)

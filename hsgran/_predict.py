@@ -333,16 +333,17 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
         if wkind == WK_FACE and gap < -FACE_BEHIND_REL * ri:
             continue  # behind a face (hsgran.facets)
         if gap <= PLANE_TOUCHING_REL * ri:
-            # touching within rounding: a contact now if approaching or pressed (a gap of
-            # 1e-19 m closing at 1e-5 m/s would otherwise come 1e-14 s later, after every
-            # zero-time pair event of a sphere wedged between neighbours on this plane)
+            # touching within rounding: a contact now if approaching beyond rounding or
+            # pressed (a gap of 1e-19 m closing at 1e-5 m/s would otherwise come 1e-14 s later,
+            # after every zero-time pair event of a sphere wedged between neighbours on this
+            # plane)
             gap = 0.0
         gn = gi[0] * nx + gi[1] * ny + gi[2] * nz
         vn = ui * nx + vi * ny + wi * nz
         if supported and gap <= TOUCH_REL * ri and vn >= -space.slack[0] \
                 and vn + min(gn, 0.0) * (seg_end[i] - t_now) >= -space.slack[0]:
             continue  # held by the plane: no contact within the segment (held_apart)
-        tau = plane_contact_time(gap, vn, gn)
+        tau = plane_contact_time(gap, vn, gn, abs(ui) + abs(vi) + abs(wi))
         if wkind == WK_FACE and tau < best:
             # a face's plane met off the face is no contact (hsgran.facets)
             fu, fv = face_coordinates(xi + tau * (ui + 0.5 * gi[0] * tau),

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from hsgran.engine import Simulation
-from hsgran.onplane import MS_REST
+from hsgran.onplane import MS_REST, MS_SLIDING
 from hsgran.scene import parse_scene
 from tests.scenes import FLOOR, num, plane, sphere
 
@@ -240,3 +240,38 @@ def test_a_call_of_the_compiled_loop_ends_after_its_budget_of_solver_work(monkey
     assert len(calls) >= 40  # one call per solve (50 segment ends), not one for the run
     np.testing.assert_array_equal(cut.pos, whole.pos)
     np.testing.assert_array_equal(cut.vel, whole.vel)
+
+
+@pytest.mark.parametrize(("normal", "carried"), [
+    ((0.0, 0.0, 1.0), True),  # a floor
+    ((0.0, 0.6, 0.8), True),  # an incline
+    ((0.0, -0.9997230906718257, -0.02353172279227536), False),  # a corpus overhang
+    ((0.0, 0.0, -1.0), False),  # a ceiling
+])
+def test_a_sphere_put_on_a_plane_that_gravity_pulls_it_from_flies(normal, carried):
+    """A cluster solve that leaves a sphere one touching contact, with a plane, puts it on that
+    plane (``_cluster._apply_states``), and a collision with another wall puts a sphere back on
+    the plane it slides on (``_settling.collide_wall``). On an overhanging plane (−g·n < 0)
+    the sphere flies instead: in on-plane motion it slid along the plane with a negative load,
+    its friction pushing it, its spin's end predicted again every 1e-17 s (corpus scene 0-15
+    stopped at the collapse guard at 0.606 s)."""
+    from hsgran._flight import enter_plane
+    from hsgran._state import GROUPS, Dyn, Flight, Space, Walls
+    from hsgran.onplane import END_NONE, MS_FLIGHT
+
+    point = tuple(num(c) for c in np.array([0.0, 0.0, 0.01]) - 0.4 * np.array(normal))
+    sim = Simulation(scene(FLOOR + plane(point, tuple(num(c) for c in normal))
+                           + sphere(("0.0", "0.0", "0.01"), ("0.003", "0.0", "0.0")),
+                           effects='"gravity", "rotation", "friction", "rolling_resistance"'))
+    flight, dyn, walls, space = (sim._groups[GROUPS.index(g)] for g in (Flight, Dyn, Walls, Space))
+    dyn.omg[0] = (0.0, 0.01, 0.0)
+    enter_plane(0, 1, 0.0, END_NONE, flight, dyn, walls, space.gravity, sim.pair_table, sim.fsc,
+                True, True, True)
+    if carried:
+        assert flight.mstate[0] == MS_SLIDING
+        assert flight.mplane[0] == 1
+        assert float(np.dot(flight.acc[0], normal)) == pytest.approx(0.0, abs=1e-15)
+    else:
+        assert flight.mstate[0] == MS_FLIGHT
+        assert list(flight.acc[0]) == list(space.gravity)
+        assert list(dyn.alpha[0]) == [0.0, 0.0, 0.0]

@@ -16,6 +16,7 @@ from hsgran.motion import (
     cylinder_contact_time,
     pair_contact_accelerated,
     pair_contact_before,
+    plane_contact_time,
     upward_root,
 )
 
@@ -61,6 +62,27 @@ def test_touching_pair_approaching_below_rounding_does_not_touch_again():
 def test_touching_pair_approaching_beyond_rounding_touches_now():
     r, w, sigma, vs, xs = _touching_pair(-1e-9)
     assert pair_contact_before(*r, *w, sigma, NEVER, vs, xs) == 0.0
+
+
+@pytest.mark.parametrize("gn", [0.0, 0.23, 9.81])
+def test_touching_plane_approached_below_rounding_without_load_is_no_contact(gn):
+    """The diagnosed loop: a cluster solve left a sphere moving at 3.7e-4 m/s touching an
+    overhanging plane (gravity along n: +0.23 m/s²) at −1e-22 m/s; met again at that instant
+    for ever. Below the rounding of vn and not pressed: no contact (gn = 0, a vertical wall:
+    a straight line into it at 1e-22 m/s is noise too)."""
+    v_sum = 3.7e-4 + 8.5e-7 + 3.6e-5
+    assert 1e-22 < 16.0 * EPS * v_sum
+    assert plane_contact_time(0.0, -1e-22, gn, v_sum) == NEVER
+    # without the rounding scale any approach of a touching sphere is a contact: now
+    assert plane_contact_time(0.0, -1e-22, gn) == 0.0
+
+
+def test_touching_plane_pressed_or_approached_beyond_rounding_is_a_contact_now():
+    v_sum = 4.1e-4
+    assert plane_contact_time(0.0, -1e-22, -9.81, v_sum) == 0.0  # pressed: gravity into it
+    assert plane_contact_time(0.0, -1e-12, 0.23, v_sum) == 0.0  # approaching beyond rounding
+    # apart by a gap: the noise rule is not for it
+    assert plane_contact_time(1e-12, -1e-22, 0.0, v_sum) == pytest.approx(1e10, rel=1e-12)
 
 
 def _first_descent_by_sampling(r, w, a, sigma, horizon, n=200001):
