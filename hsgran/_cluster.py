@@ -21,7 +21,8 @@ cluster (:func:`gather`), and at the event's instant:
    force-level problem diverge);
 3. **motion states**: a sphere slower than the landing speed that its supports hold still at
    the step's end comes to rest; one whose only persisting contact is a plane takes the
-   paper's motion on a plate (MODEL §5.3); one without persisting contacts flies; any other
+   paper's motion on a plate (MODEL §5.3), or flies if the plane overhangs it
+   (:func:`hsgran._flight.enter_plane`); one without persisting contacts flies; any other
    moves with the step's accelerations (``MS_SUPPORTED``) until its segment ends, when its
    cluster is solved again. A sphere at rest set moving wakes the resting spheres it
    touches, which are solved again at once.
