@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hsgran.motion import (
+    APPROACH_NOISE_ULPS,
     NEVER,
     OUT_OF_REACH_MARGIN,
     approach_noise,
@@ -71,7 +72,7 @@ def test_touching_plane_approached_below_rounding_without_load_is_no_contact(gn)
     for ever. Below the rounding of vn and not pressed: no contact (gn = 0, a vertical wall:
     a straight line into it at 1e-22 m/s is noise too)."""
     v_sum = 3.7e-4 + 8.5e-7 + 3.6e-5
-    assert 1e-22 < 16.0 * EPS * v_sum
+    assert 1e-22 < APPROACH_NOISE_ULPS * EPS * v_sum
     assert plane_contact_time(0.0, -1e-22, gn, v_sum) == NEVER
     # without the rounding scale any approach of a touching sphere is a contact: now
     assert plane_contact_time(0.0, -1e-22, gn) == 0.0
