@@ -234,8 +234,20 @@ def _sliding(v, w, nx, ny, nz, gn, gtx, gty, gtz, ex, ey, ez, us, radius, k, mu_
     t_spin = NEVER
     ox = oy = oz = 0.0
     if chi > 0.0 and mu_r > 0.0:
-        if rs > ROLL_SLIP_REL * (math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2) / radius + rs):
+        # the rolling spin is measured against the whole spin: ω − (ω·n) n carries the rounding
+        # of |ω|, the spin about n included, and its direction, divided by a rolling spin near
+        # that rounding, leaves the plane by as much; snapped along such a direction
+        # (END_SPIN), a spin about n of 1.4e-9 rad/s left a rolling spin of 4e-18 rad/s, whose
+        # end came 3e-20 s later, for ever (a corpus polygon at 0.1996 s). So the direction is
+        # put back in the plane, and a rolling spin within ROLL_SLIP_REL of |v|/R + |ω| is
+        # none. [OURS]
+        ws = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+        if rs > ROLL_SLIP_REL * (math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2) / radius + ws):
             ox, oy, oz = rx / rs, ry / rs, rz / rs
+            on = ox * nx + oy * ny + oz * nz
+            ox, oy, oz = ox - on * nx, oy - on * ny, oz - on * nz
+            os = math.sqrt(ox * ox + oy * oy + oz * oz)
+            ox, oy, oz = ox / os, oy / os, oz / os
             mr = mu_r
         else:
             ox, oy, oz = fx, fy, fz  # no rolling spin yet: it will grow along the friction torque

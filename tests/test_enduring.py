@@ -341,3 +341,30 @@ def test_energy_lost_on_a_plate_is_dissipated_energy_and_follows_the_closed_form
     assert diss[0] == pytest.approx(0.0, abs=ENERGY_RTOL * e0)
     assert diss[-1] == pytest.approx(e0, rel=ENERGY_RTOL)
     assert np.all(np.diff(diss) >= -ENERGY_RTOL * e0)  # never gained back
+
+
+def test_a_snapped_spin_end_leaves_no_rolling_spin_that_ends_again_at_once():
+    """A sphere sliding at 7e-12 m/s on a 6.4° plane of a corpus polygon, spinning about the
+    normal at 1.4e-9 rad/s, rolling spin 4e-18 rad/s: its spin end (END_SPIN, convention A)
+    came 3e-20 s later, was snapped, and came again, until the collapse guard stopped the run
+    at 0.1996 s. The rolling spin's direction, from a rolling spin near the rounding of the
+    whole spin, left the plane by 3e-8, and the snap along it made the next one. The state
+    below is the loop's (its direction the old one): the first segment may still end at once,
+    but the one after its snap, along a direction in the plane, does not."""
+    from hsgran.onplane import CONVENTION_A, END_SPIN, plane_segment
+
+    n = np.array([-0.1119644759894172, -0.0, 0.993712209906075])
+    g = np.array([0.0, 0.0, -9.81])
+    v = np.array([-2.2085576388032713e-18, 6.5980862024088053e-12, -2.4884468184647297e-19])
+    w = np.array([-1.5396419682819323e-10, 4.5301837348345403e-18, 1.3664700426144004e-09])
+    sdir = np.array([2.8530182941052638e-08, 9.9999999999999967e-01, 0.0])
+    for k in range(4):
+        state, *_, dur, code = plane_segment(v, w, n, g, 0.00199925069, 0.4, 0.708646531,
+                                             0.0110893784, CONVENTION_A, END_SPIN, sdir)
+        assert state == MS_SLIDING
+        assert abs(np.dot(sdir, n)) < 1e-15  # the next snap's direction lies in the plane
+        if code != END_SPIN:
+            break
+        assert k == 0 or dur > 1e-12, "a spin end again within round-off of the clock"
+    rolling = w - np.dot(w, n) * n
+    assert np.linalg.norm(rolling) < 1e-20
