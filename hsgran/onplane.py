@@ -166,7 +166,7 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, spee
 
     if us > ROLL_SLIP_REL * scale:
         return _sliding(v, w, nx, ny, nz, gn, gtx, gty, gtz, ux / us, uy / us, uz / us, us,
-                        radius, k, mu_s, mu_r, chi, sdir)
+                        vs, ws, radius, k, mu_s, mu_r, chi, sdir)
 
     # rolling (or at rest): make the no-slip condition exact
     wn = w[0] * nx + w[1] * ny + w[2] * nz
@@ -199,9 +199,10 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, spee
     fs = math.sqrt(fx * fx + fy * fy + fz * fz)
     if fs > mu_s * gn:
         # friction cannot keep it rolling: it slips in the direction opposite to the friction
-        # it would need
+        # it would need (ω was made rolling above: its size is taken again)
+        ws = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
         return _sliding(v, w, nx, ny, nz, gn, gtx, gty, gtz, -fx / fs, -fy / fs, -fz / fs, 0.0,
-                        radius, k, mu_s, mu_r, chi, sdir)
+                        vs, ws, radius, k, mu_s, mu_r, chi, sdir)
     alx, aly, alz = _cross(nx, ny, nz, ax, ay, az)
     along = ax * dx + ay * dy + az * dz
     sdir[0] = dx
@@ -213,9 +214,10 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, spee
 
 
 @njit
-def _sliding(v, w, nx, ny, nz, gn, gtx, gty, gtz, ex, ey, ez, us, radius, k, mu_s, mu_r, chi,
-             sdir):
-    """Sliding segment with slip direction e = û and slip speed ``us``."""
+def _sliding(v, w, nx, ny, nz, gn, gtx, gty, gtz, ex, ey, ez, us, vs, ws, radius, k, mu_s, mu_r,
+             chi, sdir):
+    """Sliding segment with slip direction e = û and slip speed ``us`` [m/s]; ``vs`` = |v| [m/s]
+    and ``ws`` = |ω| [rad/s] are the caller's."""
     ax = gtx - mu_s * gn * ex
     ay = gty - mu_s * gn * ey
     az = gtz - mu_s * gn * ez
@@ -241,8 +243,7 @@ def _sliding(v, w, nx, ny, nz, gn, gtx, gty, gtz, ex, ey, ez, us, radius, k, mu_
         # end came 3e-20 s later, for ever (a corpus polygon at 0.1996 s). So the direction is
         # put back in the plane, and a rolling spin within ROLL_SLIP_REL of |v|/R + |ω| is
         # none. [OURS]
-        ws = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
-        if rs > ROLL_SLIP_REL * (math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2) / radius + ws):
+        if rs > ROLL_SLIP_REL * (vs / radius + ws):
             ox, oy, oz = rx / rs, ry / rs, rz / rs
             on = ox * nx + oy * ny + oz * nz
             ox, oy, oz = ox - on * nx, oy - on * ny, oz - on * nz
