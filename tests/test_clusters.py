@@ -254,12 +254,13 @@ def test_a_sphere_put_on_a_plane_that_gravity_pulls_it_from_flies(normal, carrie
     the plane it slides on (``_settling.collide_wall``). On an overhanging plane (−g·n < 0)
     the sphere flies instead: in on-plane motion it slid along the plane with a negative load,
     its friction pushing it, its spin's end predicted again every 1e-17 s (corpus scene 0-15
-    stopped at the collapse guard at 0.606 s)."""
+    stopped at the collapse guard at 0.606 s). (The sphere touches the plane: one that does
+    not flies, below.)"""
     from hsgran._flight import enter_plane
     from hsgran._state import GROUPS, Dyn, Flight, Space, Walls
     from hsgran.onplane import END_NONE, MS_FLIGHT
 
-    point = tuple(num(c) for c in np.array([0.0, 0.0, 0.01]) - 0.4 * np.array(normal))
+    point = tuple(num(c) for c in np.array([0.0, 0.0, 0.01]) - R * np.array(normal))
     sim = Simulation(scene(FLOOR + plane(point, tuple(num(c) for c in normal))
                            + sphere(("0.0", "0.0", "0.01"), ("0.003", "0.0", "0.0")),
                            effects='"gravity", "rotation", "friction", "rolling_resistance"'))
@@ -275,3 +276,40 @@ def test_a_sphere_put_on_a_plane_that_gravity_pulls_it_from_flies(normal, carrie
         assert flight.mstate[0] == MS_FLIGHT
         assert list(flight.acc[0]) == list(space.gravity)
         assert list(dyn.alpha[0]) == [0.0, 0.0, 0.0]
+
+
+@pytest.mark.parametrize("lift", [1e-11, 1e-7, 1e-6])
+def test_a_sphere_put_on_a_plane_it_does_not_touch_flies_and_is_not_moved(lift):
+    """A cluster solve counts a plane within TOUCH_REL (1e-6 of σ) as touching and can leave a
+    sphere at rest or moving on it that far above it. Moved down onto the plane when it is put
+    there, the sphere went into a smaller neighbour on the same plane: in corpus scene 0-28
+    (a V wedge) a sphere of 4.45 mm resting 4.3 nm above its plane was put back on it by a
+    collision and overlapped its 1.59 mm neighbour by 2.2e-7 σ (worst overlap 3.8e-8 σ in
+    the frames). A sphere beyond the prediction's touching distance of the plane flies
+    instead, unmoved, and falls onto it; one within rounding of it is put on it."""
+    from hsgran._flight import PLANE_TOUCHING_REL, enter_plane
+    from hsgran._state import GROUPS, Dyn, Flight, Space, Walls
+    from hsgran.onplane import END_NONE, MS_FLIGHT
+
+    r_small = R / 3.0
+    z_big = R + lift * R
+    # the small sphere on the floor, touching the big one (centre distance R + r_small)
+    dz = z_big - r_small
+    dx = math.sqrt((R + r_small) ** 2 - dz * dz)
+    sim = Simulation(scene(FLOOR + sphere(("0.0", "0.0", num(z_big)))
+                           + sphere((num(dx), "0.0", num(r_small)), radius=num(r_small))))
+    flight, dyn, walls, space = (sim._groups[GROUPS.index(g)] for g in (Flight, Dyn, Walls, Space))
+    before = sim.pos[0].copy()
+    enter_plane(0, 0, 0.0, END_NONE, flight, dyn, walls, space.gravity, sim.pair_table, sim.fsc,
+                True, False, True)
+    gap = float(np.linalg.norm(sim.pos[0] - sim.pos[1])) - (R + r_small)
+    # no overlap beyond what a snap within touching can make (the old snap from any height:
+    # lift R (R - r)/(R + r))
+    assert gap >= -PLANE_TOUCHING_REL * R
+    if lift * R > PLANE_TOUCHING_REL * R:
+        assert flight.mstate[0] == MS_FLIGHT
+        assert list(sim.pos[0]) == list(before)
+        assert list(flight.acc[0]) == list(space.gravity)
+    else:
+        assert flight.mstate[0] != MS_FLIGHT
+        assert sim.pos[0][2] == pytest.approx(R, abs=PLANE_TOUCHING_REL * R)
