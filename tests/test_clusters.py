@@ -242,6 +242,26 @@ def test_a_call_of_the_compiled_loop_ends_after_its_budget_of_solver_work(monkey
     np.testing.assert_array_equal(cut.vel, whole.vel)
 
 
+def _groups(sim):
+    """The engine's state groups a test hands to a kernel: (Flight, Dyn, Space)."""
+    from hsgran._state import GROUPS, Dyn, Flight, Space
+
+    return tuple(sim._groups[GROUPS.index(g)] for g in (Flight, Dyn, Space))
+
+
+def _enter_plane(sim, i, w, rolling):
+    """``hsgran._flight.enter_plane`` on sphere i and plane w of ``sim`` at t = 0, with
+    friction and rotation (and rolling resistance if ``rolling``)."""
+    from hsgran._flight import enter_plane
+    from hsgran._state import GROUPS, Walls
+    from hsgran.onplane import END_NONE
+
+    flight, dyn, space = _groups(sim)
+    walls = sim._groups[GROUPS.index(Walls)]
+    enter_plane(i, w, 0.0, END_NONE, flight, dyn, walls, space.gravity, sim.pair_table, sim.fsc,
+                True, rolling, True)
+
+
 @pytest.mark.parametrize(("normal", "carried"), [
     ((0.0, 0.0, 1.0), True),  # a floor
     ((0.0, 0.6, 0.8), True),  # an incline
@@ -256,18 +276,15 @@ def test_a_sphere_put_on_a_plane_that_gravity_pulls_it_from_flies(normal, carrie
     its friction pushing it, its spin's end predicted again every 1e-17 s (corpus scene 0-15
     stopped at the collapse guard at 0.606 s). (The sphere touches the plane: one that does
     not flies, below.)"""
-    from hsgran._flight import enter_plane
-    from hsgran._state import GROUPS, Dyn, Flight, Space, Walls
-    from hsgran.onplane import END_NONE, MS_FLIGHT
+    from hsgran.onplane import MS_FLIGHT
 
     point = tuple(num(c) for c in np.array([0.0, 0.0, 0.01]) - R * np.array(normal))
     sim = Simulation(scene(FLOOR + plane(point, tuple(num(c) for c in normal))
                            + sphere(("0.0", "0.0", "0.01"), ("0.003", "0.0", "0.0")),
                            effects='"gravity", "rotation", "friction", "rolling_resistance"'))
-    flight, dyn, walls, space = (sim._groups[GROUPS.index(g)] for g in (Flight, Dyn, Walls, Space))
+    flight, dyn, space = _groups(sim)
     dyn.omg[0] = (0.0, 0.01, 0.0)
-    enter_plane(0, 1, 0.0, END_NONE, flight, dyn, walls, space.gravity, sim.pair_table, sim.fsc,
-                True, True, True)
+    _enter_plane(sim, 0, 1, rolling=True)
     if carried:
         assert flight.mstate[0] == MS_SLIDING
         assert flight.mplane[0] == 1
@@ -287,9 +304,8 @@ def test_a_sphere_put_on_a_plane_it_does_not_touch_flies_and_is_not_moved(lift):
     collision and overlapped its 1.59 mm neighbour by 2.2e-7 σ (worst overlap 3.8e-8 σ in
     the frames). A sphere beyond the prediction's touching distance of the plane flies
     instead, unmoved, and falls onto it; one within rounding of it is put on it."""
-    from hsgran._flight import PLANE_TOUCHING_REL, enter_plane
-    from hsgran._state import GROUPS, Dyn, Flight, Space, Walls
-    from hsgran.onplane import END_NONE, MS_FLIGHT
+    from hsgran._flight import PLANE_TOUCHING_REL
+    from hsgran.onplane import MS_FLIGHT
 
     r_small = R / 3.0
     z_big = R + lift * R
@@ -298,10 +314,9 @@ def test_a_sphere_put_on_a_plane_it_does_not_touch_flies_and_is_not_moved(lift):
     dx = math.sqrt((R + r_small) ** 2 - dz * dz)
     sim = Simulation(scene(FLOOR + sphere(("0.0", "0.0", num(z_big)))
                            + sphere((num(dx), "0.0", num(r_small)), radius=num(r_small))))
-    flight, dyn, walls, space = (sim._groups[GROUPS.index(g)] for g in (Flight, Dyn, Walls, Space))
+    flight, _, space = _groups(sim)
     before = sim.pos[0].copy()
-    enter_plane(0, 0, 0.0, END_NONE, flight, dyn, walls, space.gravity, sim.pair_table, sim.fsc,
-                True, False, True)
+    _enter_plane(sim, 0, 0, rolling=False)
     gap = float(np.linalg.norm(sim.pos[0] - sim.pos[1])) - (R + r_small)
     # no overlap beyond what a snap within touching can make (the old snap from any height:
     # lift R (R - r)/(R + r))
