@@ -543,6 +543,14 @@ def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, c4, c3, c2, c1, h, 
         hi = bounds[k + 1]
         flo = _dpoly(c4, c3, c2, c1, lo)
         fhi = _dpoly(c4, c3, c2, c1, hi)
+        if flo < 0.0 < fhi and _clear_minimum(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, lo,
+                                              hi):
+            # f falls to a minimum inside the piece and rises after it, never reaching zero:
+            # no crossing from a to the minimum, nor on its way up (which the next piece
+            # starts from; from hi instead of the minimum, where f rises still)
+            a = hi
+            first = False
+            continue
         if (flo > 0.0) != (fhi > 0.0) and flo != 0.0 and fhi != 0.0:
             b = _dpoly_root(c4, c3, c2, c1, lo, hi, flo, fhi)
             if b > a and a >= after and not (touching and first):
@@ -556,6 +564,68 @@ def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, c4, c3, c2, c1, h, 
         if found:
             return tau
     return NEVER
+
+
+#: Relative margin by which a convex piece's lower bound must clear zero for
+#: :func:`_clear_minimum` to skip its search [-], of the square of the largest distance the
+#: pair can have on the piece, (|r| + |w| h + ½ |a| h²)²: f and f' there carry a rounding of
+#: a few units of round-off of it (the tangents' error adds f'·width's, of the same order),
+#: 10⁴ times below this; and f'' may be negative within a few units of round-off of the
+#: piece's ends (the zeros of f'' are rounded), where f departs from a tangent by a third-order
+#: amount, far less again. f's minimum within the margin of zero is searched as before.
+CLEAR_MARGIN_REL = 1e-12
+#: Tangents :func:`_clear_minimum` draws before it gives up and lets the search decide [-]:
+#: each halves (or better) the gap between the lower bound and f's least value found, and a
+#: minimum as close to zero as a contact's is not cleared by any number of them.
+CLEAR_TANGENTS = 16
+
+
+@njit(inline="always")
+def _displacement2(wx, wy, wz, ax, ay, az, t):
+    """|D(t)|² = |w t + ½ a t²|² [m²]."""
+    px = t * (wx + 0.5 * ax * t)
+    py = t * (wy + 0.5 * ay * t)
+    pz = t * (wz + 0.5 * az * t)
+    return px * px + py * py + pz * pz
+
+
+@njit(inline="always")
+def _clear_minimum(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, lo, hi):
+    """Whether f (:func:`_gap_poly`) stays clear above zero on [lo, hi], a piece where it is
+    convex (f' rises through zero there; :func:`_first_fall`), shown by a lower bound: on a
+    convex piece f lies above its tangents, so the least value of the two tangents at p and q
+    (where they meet) bounds f's minimum on [p, q] from below. Starting from the piece's
+    ends, each new tangent is drawn where the last two meet, replacing the one on its side of
+    the minimum (Kelley's cutting planes). Returns True once the bound clears zero by the
+    margin, False where f comes within it or the tangents run out: a minimum near zero (a
+    grazing pass or a contact) is left to the exact search, whose answer this never changes.
+    It costs a few evaluations of f where the search of f's minimum to round-off costs five to
+    ten of f' and then two of f: most flying spheres near resting ones in a settling pour
+    pass them by (docs/performance.md)."""
+    rr = rx * rx + ry * ry + rz * rz
+    p = lo
+    fp, dp, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, p)
+    q = hi
+    fq, dq, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, q)
+    for _ in range(CLEAR_TANGENTS):
+        # the rounding of f and of f'·(t − p) at the tangents' points: of f0 + 2 r·D + |D|²,
+        # a few units of round-off of |r|² + |D|² (|D| ≤ |d| + |r|, d = r + D)
+        margin = CLEAR_MARGIN_REL * (rr + max(_displacement2(wx, wy, wz, ax, ay, az, p),
+                                              _displacement2(wx, wy, wz, ax, ay, az, q)))
+        if not (fp > margin and fq > margin and dp < 0.0 < dq):
+            return False
+        # where the tangents meet (between p and q for a convex f), and their value there
+        t = p + (fq - fp - dq * (q - p)) / (dp - dq)
+        if not p < t < q:
+            return False
+        if fp + dp * (t - p) > margin:
+            return True
+        ft, dt, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t)
+        if dt < 0.0:
+            p, fp, dp = t, ft, dt
+        else:
+            q, fq, dq = t, ft, dt
+    return False
 
 
 #: An excursion of f = |d|² − |r|² below this many units of round-off of |r|² is lost in the
