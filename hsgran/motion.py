@@ -567,12 +567,13 @@ def _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, c4, c3, c2, c1, h, 
 
 
 #: Relative margin by which a convex piece's lower bound must clear zero for
-#: :func:`_clear_minimum` to skip its search [-], of the square of the largest distance the
-#: pair can have on the piece, (|r| + |w| h + ½ |a| h²)²: f and f' there carry a rounding of
-#: a few units of round-off of it (the tangents' error adds f'·width's, of the same order),
-#: 10⁴ times below this; and f'' may be negative within a few units of round-off of the
-#: piece's ends (the zeros of f'' are rounded), where f departs from a tangent by a third-order
-#: amount, far less again. f's minimum within the margin of zero is searched as before.
+#: :func:`_clear_minimum` to skip its search [-], of |r|² + |D|² at the tangents' points
+#: (D = w τ + ½ a τ², the displacement): f = f0 + 2 r·D + |D|² and f' carry a rounding of a
+#: few units of round-off of it there (the tangents' error adds f'·width's, of the same
+#: order), 10⁴ times below this; and f'' may be negative within a few units of round-off of
+#: the piece's ends (the zeros of f'' are rounded), where f departs from a tangent by a
+#: third-order amount, far less again. f's minimum within the margin of zero is searched as
+#: before.
 CLEAR_MARGIN_REL = 1e-12
 #: Tangents :func:`_clear_minimum` draws before it gives up and lets the search decide [-]:
 #: each halves (or better) the gap between the lower bound and f's least value found, and a

@@ -71,6 +71,12 @@ CONVENTION_B = 0.0  #: χ = 0: rolling torque acts only while rolling
 #: rest) is rolling: 1e-12 is ~1e4 ulp, above the round-off of a transition computed from the
 #: closed form, and far below any slip that matters (a 1 m/s sphere slips 1 pm/s).
 ROLL_SLIP_REL = 1e-12
+#: A rolling sphere slower than the load g_n gives in this time [s] is at rest (and starts
+#: down the fall line where the slope is steeper than rolling friction holds): 1e-11 m/s on a
+#: level plane, far below any speed that matters (a settled pile's 1e-6 m/s) and far above
+#: the round-off a stop leaves across the rolling direction (~1e-16 of the speed before it),
+#: which otherwise ends each following segment at the same instant (:func:`plane_segment`).
+ROLL_REST_TIME = 1e-12
 
 NEVER = math.inf
 
@@ -175,6 +181,19 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, spee
     w[1] = wn * ny + cy / radius
     w[2] = wn * nz + cz / radius
     gts = math.sqrt(gtx * gtx + gty * gty + gtz * gtz)
+    if vs <= ROLL_REST_TIME * gn:
+        # a rolling speed the load would give in ROLL_REST_TIME is none: the round-off a stop
+        # (END_STOP) leaves across the rolling direction, which, taken as a direction, ends
+        # the next segment 1e-34 s later with a smaller residue, and so on down to underflow
+        # (a corpus sphere rolling into the corner of an incline and a wall: ~250 stops at
+        # one instant after each of its bounces, 51 million in 1.1 s). [OURS]
+        v[0] = 0.0
+        v[1] = 0.0
+        v[2] = 0.0
+        w[0] = wn * nx
+        w[1] = wn * ny
+        w[2] = wn * nz
+        vs = 0.0
     if vs > 0.0:
         dx, dy, dz = v[0] / vs, v[1] / vs, v[2] / vs
     else:

@@ -236,6 +236,53 @@ def test_sphere_rolling_uphill_stops_and_rolls_back_down():
                                rtol=CLOSED_FORM_RTOL)
 
 
+
+@pytest.mark.parametrize("theta", [10.0, 19.0, 33.0])
+@pytest.mark.parametrize("v0", [-0.5, -3.6e-6])
+def test_sphere_rolling_uphill_stops_once(theta, v0):
+    """A sphere rolling up an incline stops once and rolls back down: one END_STOP event, not
+    a stop at the same instant after each stop, every one from the round-off the last left
+    across the rolling direction (a corpus sphere did ~250 after each bounce; ROLL_REST_TIME).
+    Launched at 0.5 m/s and at 3.6 µm/s, the speed of that corpus sphere."""
+    scene, th = incline(theta, 0.3, 0.01, v0=v0)
+    keep = Keep()
+    sim = Simulation(scene, log_events=True)
+    sim.run(observers=[keep])
+    assert np.count_nonzero(keep.log("regime") == END_STOP) == 1
+    g = 9.81
+    decel = (g * math.sin(th) + 0.01 * g * math.cos(th)) / (1 + K)
+    np.testing.assert_allclose(keep.log("time")[keep.log("regime") == END_STOP], -v0 / decel,
+                               rtol=CLOSED_FORM_RTOL)
+
+
+def test_a_rolling_speed_below_what_the_load_gives_in_the_rest_time_is_none():
+    """plane_segment: a velocity of 1e-30 m/s across the last rolling direction after a stop
+    (its round-off) does not start a segment that ends 1e-31 s later: the sphere starts from
+    rest down the fall line, a segment without end; 1e-6 m/s (a real speed) still rolls and
+    stops."""
+    from hsgran.onplane import ROLL_REST_TIME, plane_segment
+
+    th = math.radians(19.0)
+    n = np.array([math.sin(th), 0.0, math.cos(th)])
+    up = np.array([-math.cos(th), 0.0, math.sin(th)])
+    g = np.array([0.0, 0.0, -9.81])
+    side = np.array([0.0, 1.0, 0.0])
+    for speed, stops in ((1e-30, False), (0.5 * ROLL_REST_TIME * 9.81 * math.cos(th), False),
+                         (1e-6, True)):
+        v = speed * (0.6 * up + 0.8 * side)
+        w = np.cross(n, v) / 0.01
+        sdir = side.copy()
+        state, *_, dur, code = plane_segment(v, w, n, g, 0.01, K, 0.3, 0.01, 1.0, END_STOP,
+                                             sdir)
+        assert state == MS_ROLLING
+        if stops:
+            assert code == END_STOP
+            assert dur > 0.0
+        else:
+            assert code != END_STOP
+            assert dur == math.inf
+            assert not v.any()
+
 BOUNCE = """
 [scene]
 name = "dropped ball"
