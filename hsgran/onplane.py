@@ -186,7 +186,8 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, spee
         # (END_STOP) leaves across the rolling direction, which, taken as a direction, ends
         # the next segment 1e-34 s later with a smaller residue, and so on down to underflow
         # (a corpus sphere rolling into the corner of an incline and a wall: ~250 stops at
-        # one instant after each of its bounces, 51 million in 1.1 s). [OURS]
+        # one instant after each of its bounces, 51 million in 1.1 s). [OURS] (Also the
+        # exact zero state of a sphere at rest, v = 0 and ω about n only.)
         v[0] = 0.0
         v[1] = 0.0
         v[2] = 0.0
@@ -199,13 +200,7 @@ def plane_segment(v, w, n, g, radius, inertia, mu_s, mu_r, chi, snap, sdir, spee
     else:
         if holds_still(gts, gn, mu_s, mu_r):
             # at rest: the rolling torque holds the sphere against the slope, and friction the
-            # contact point (exact zero state)
-            v[0] = 0.0
-            v[1] = 0.0
-            v[2] = 0.0
-            w[0] = wn * nx
-            w[1] = wn * ny
-            w[2] = wn * nz
+            # contact point (in the exact zero state set above)
             return MS_REST, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, NEVER, END_NONE
         dx, dy, dz = gtx / gts, gty / gts, gtz / gts  # starts rolling down the fall line
     c = 1.0 / (1.0 + k)
