@@ -259,6 +259,12 @@ def gap_at_start(rx, ry, rz, sigma):
 
 
 @njit(inline="always")
+def _displacement(wx, wy, wz, ax, ay, az, t):
+    """D(t) = w t + ½ a t² [m], componentwise."""
+    return t * (wx + 0.5 * ax * t), t * (wy + 0.5 * ay * t), t * (wz + 0.5 * az * t)
+
+
+@njit(inline="always")
 def _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t):
     """f(t) = sgn (|r + w t + ½ a t²|² − σ²), f'(t) and f''(t), from f0 = |r|² − σ² and the
     displacement D = w t + ½ a t² as f0 + 2 r·D + |D|²: near contact D is small, so f carries
@@ -268,9 +274,7 @@ def _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t):
     quartic, it has no cancelling coefficients. sgn = 1 for spheres apart, −1 for a distance
     that must stay below σ (a sphere inside a cylinder). Also f''(t) = 2 (|u|² + d·a), with
     u = w + a t and d = r + D (the root search's local model, :func:`_bracketed_root`)."""
-    px = t * (wx + 0.5 * ax * t)
-    py = t * (wy + 0.5 * ay * t)
-    pz = t * (wz + 0.5 * az * t)
+    px, py, pz = _displacement(wx, wy, wz, ax, ay, az, t)
     f = f0 + (2.0 * (rx * px + ry * py + rz * pz) + (px * px + py * py + pz * pz))
     ux = wx + ax * t
     uy = wy + ay * t
@@ -583,10 +587,8 @@ CLEAR_TANGENTS = 16
 
 @njit(inline="always")
 def _displacement2(wx, wy, wz, ax, ay, az, t):
-    """|D(t)|² = |w t + ½ a t²|² [m²]."""
-    px = t * (wx + 0.5 * ax * t)
-    py = t * (wy + 0.5 * ay * t)
-    pz = t * (wz + 0.5 * az * t)
+    """|D(t)|² [m²] (:func:`_displacement`)."""
+    px, py, pz = _displacement(wx, wy, wz, ax, ay, az, t)
     return px * px + py * py + pz * pz
 
 
@@ -604,15 +606,17 @@ def _clear_minimum(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, lo, hi):
     ten of f' and then two of f: most flying spheres near resting ones in a settling pour
     pass them by (docs/performance.md)."""
     rr = rx * rx + ry * ry + rz * rz
+    # each tangent's point: τ, f, f' and |D|² there (the last for the margin)
     p = lo
     fp, dp, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, p)
+    mp = _displacement2(wx, wy, wz, ax, ay, az, p)
     q = hi
     fq, dq, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, q)
+    mq = _displacement2(wx, wy, wz, ax, ay, az, q)
     for _ in range(CLEAR_TANGENTS):
         # the rounding of f and of f'·(t − p) at the tangents' points: of f0 + 2 r·D + |D|²,
         # a few units of round-off of |r|² + |D|² (|D| ≤ |d| + |r|, d = r + D)
-        margin = CLEAR_MARGIN_REL * (rr + max(_displacement2(wx, wy, wz, ax, ay, az, p),
-                                              _displacement2(wx, wy, wz, ax, ay, az, q)))
+        margin = CLEAR_MARGIN_REL * (rr + max(mp, mq))
         if not (fp > margin and fq > margin and dp < 0.0 < dq):
             return False
         # where the tangents meet (between p and q for a convex f), and their value there
@@ -622,10 +626,11 @@ def _clear_minimum(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, lo, hi):
         if fp + dp * (t - p) > margin:
             return True
         ft, dt, _ = _gap_poly(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, t)
+        mt = _displacement2(wx, wy, wz, ax, ay, az, t)
         if dt < 0.0:
-            p, fp, dp = t, ft, dt
+            p, fp, dp, mp = t, ft, dt, mt
         else:
-            q, fq, dq = t, ft, dt
+            q, fq, dq, mq = t, ft, dt, mt
     return False
 
 

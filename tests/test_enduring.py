@@ -226,8 +226,7 @@ def test_sphere_rolling_uphill_stops_and_rolls_back_down():
     sim = Simulation(scene, log_events=True)
     sim.run(observers=[keep])
     g = 9.81
-    decel = (g * math.sin(th) + mu_r * g * math.cos(th)) / (1 + K)
-    t_stop = 0.5 / decel
+    t_stop = 0.5 / _uphill_deceleration(th, mu_r)
     stops = keep.log("time")[keep.log("regime") == END_STOP]
     np.testing.assert_allclose(stops[0], t_stop, rtol=CLOSED_FORM_RTOL)
     accel = (g * math.sin(th) - mu_r * g * math.cos(th)) / (1 + K)
@@ -235,6 +234,11 @@ def test_sphere_rolling_uphill_stops_and_rolls_back_down():
     np.testing.assert_allclose(distance_along_fall_line(sim, scene, th, 0.5), want,
                                rtol=CLOSED_FORM_RTOL)
 
+
+def _uphill_deceleration(th, mu_r, g=9.81):
+    """Deceleration of a sphere rolling up an incline of θ [rad] against rolling friction μ_r
+    [m/s²] (MODEL §5.3)."""
+    return (g * math.sin(th) + mu_r * g * math.cos(th)) / (1 + K)
 
 
 @pytest.mark.parametrize("theta", [10.0, 19.0, 33.0])
@@ -249,10 +253,8 @@ def test_sphere_rolling_uphill_stops_once(theta, v0):
     sim = Simulation(scene, log_events=True)
     sim.run(observers=[keep])
     assert np.count_nonzero(keep.log("regime") == END_STOP) == 1
-    g = 9.81
-    decel = (g * math.sin(th) + 0.01 * g * math.cos(th)) / (1 + K)
-    np.testing.assert_allclose(keep.log("time")[keep.log("regime") == END_STOP], -v0 / decel,
-                               rtol=CLOSED_FORM_RTOL)
+    np.testing.assert_allclose(keep.log("time")[keep.log("regime") == END_STOP],
+                               -v0 / _uphill_deceleration(th, 0.01), rtol=CLOSED_FORM_RTOL)
 
 
 def test_a_rolling_speed_below_what_the_load_gives_in_the_rest_time_is_none():
@@ -282,6 +284,7 @@ def test_a_rolling_speed_below_what_the_load_gives_in_the_rest_time_is_none():
             assert code != END_STOP
             assert dur == math.inf
             assert not v.any()
+
 
 BOUNCE = """
 [scene]

@@ -369,7 +369,6 @@ def test_root_search_ends_at_the_two_doubles_where_the_sign_changes(c, span, whe
     assert (_dpoly(c4, c[1], c[2], c[3], b) > 0.0) != (flo > 0.0)
 
 
-
 def _falling_pieces(r, w, a, sigma, horizon):
     """The pieces [lo, hi] of a quartic pair's search (as hsgran.motion._first_fall splits it)
     on which f' rises through zero: f is convex there, with its minimum inside."""
