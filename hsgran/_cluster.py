@@ -59,7 +59,11 @@ from hsgran._flight import (
 from hsgran._jit import njit
 from hsgran._predict import cell_heads, near_wall, near_walls, reschedule_fn
 from hsgran._riding import moving_gap
-from hsgran._settling import WEDGE_EVENTS
+from hsgran._settling import (
+    WEDGE_EVENTS,
+    rests_on_plane_and_sphere,
+    rests_on_two_planes,
+)
 from hsgran._state import (
     F_CLUSTER_LOSS,
     F_LANDING_SPEED,
@@ -942,6 +946,31 @@ def hands_over(i, j, flight, dyn, flags):
     if mstate[i] == MS_SUPPORTED or zstreak[i] >= HAND_OVER_STREAK:
         return True
     return j >= 0 and (mstate[j] == MS_SUPPORTED or zstreak[j] >= HAND_OVER_STREAK)
+
+
+@njit(inline="always")
+def hands_over_wall(i, w, t, flight, dyn, walls, space, pair_table, fsc, flags):
+    """Whether the collision of sphere i with wall w at time t [s] is solved as a cluster: as
+    :func:`hands_over`, and also where a slow sphere on one flat wall that cannot rest on it
+    alone is pressed into another (hsgran._settling.rests_on_two_planes): a support by two
+    walls, which the pairwise rules can only hop off."""
+    return hands_over(i, -1, flight, dyn, flags) or rests_on_two_planes(
+        i, w, t, flight, dyn, walls, space.gravity, pair_table, fsc, flags[FL_FRICTION],
+        flags[FL_ROLLING])
+
+
+@njit(inline="always")
+def hands_over_pair(i, j, flight, dyn, walls, space, pair_table, fsc, flags):
+    """Whether the collision of spheres i and j is solved as a cluster: as :func:`hands_over`,
+    and also where one, slow on a flat wall that cannot hold it alone, meets the other at
+    rest (hsgran._settling.rests_on_plane_and_sphere): a support by the wall and the sphere."""
+    if hands_over(i, j, flight, dyn, flags):
+        return True
+    g, friction, rolling = space.gravity, flags[FL_FRICTION], flags[FL_ROLLING]
+    return (rests_on_plane_and_sphere(i, j, flight, dyn, walls, g, pair_table, fsc, friction,
+                                      rolling)
+            or rests_on_plane_and_sphere(j, i, flight, dyn, walls, g, pair_table, fsc, friction,
+                                         rolling))
 
 
 @njit

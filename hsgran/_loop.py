@@ -33,7 +33,13 @@ import math
 
 import numpy as np
 
-from hsgran._cluster import CL_SOLVED, cluster_collision, cluster_resolve, hands_over
+from hsgran._cluster import (
+    CL_SOLVED,
+    cluster_collision,
+    cluster_resolve,
+    hands_over_pair,
+    hands_over_wall,
+)
 from hsgran._cylinder import enter_cylinder, set_cylinder_contact, track_before
 from hsgran._exchange import absent, remove_sphere
 from hsgran._flight import (
@@ -387,7 +393,8 @@ def _pair_handler(grav_on):
         else:
             p_i = p_j = (0.0, 0.0, 0.0)
             w_i = 0.5
-        if grav_on and hands_over(i, j, flight, dyn, flags) and cluster_collision(
+        if grav_on and hands_over_pair(i, j, flight, dyn, walls, space, pair_table, fsc,
+                                       flags) and cluster_collision(
                 i, j, -1, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
                 rec, flags) == CL_SOLVED:
             # touching other bodies: solved with them (it re-predicted them all)
@@ -493,9 +500,10 @@ def _wall_handler(grav_on):
             set_ball_contact(walls, w, st[i, 0], st[i, 1], st[i, 2])
         obs_on = observing(dyn)
         p_i = before_wall(i, t, flight, dyn, walls, space, grav_on) if obs_on else (0.0, 0.0, 0.0)
-        if grav_on and hands_over(i, -1, flight, dyn, flags) and cluster_collision(
-                i, -1, w, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
-                rec, flags) == CL_SOLVED:
+        if grav_on and hands_over_wall(i, w, t, flight, dyn, walls, space, pair_table, fsc,
+                                       flags) \
+                and cluster_collision(i, -1, w, t, flight, dyn, walls, space, grid, sched, clus,
+                                      isc, pair_table, fsc, rec, flags) == CL_SOLVED:
             counts[EV_CLUSTER] += 1
             return _finish_collision(EV_WALL, i, -1 - w, t, False, False, -1, -1, st, mstate,
                                      zstreak, out, fsc, isc, counts, rec, log_on)

@@ -74,7 +74,16 @@ from hsgran.contact.model import (
 from hsgran.events.kinds import EV_HOP
 from hsgran.materials import P_MU_R, P_MU_S
 from hsgran.motion import NEVER
-from hsgran.onplane import END_NONE, MS_FLIGHT, MS_REST, holds_still, load_and_pull
+from hsgran.onplane import (
+    END_NONE,
+    MS_FLIGHT,
+    MS_REST,
+    MS_ROLLING,
+    MS_SLIDING,
+    holds_still,
+    load_and_pull,
+)
+from hsgran.wallspec import WK_FACE, WK_PLANE
 
 #: Events of one sphere in succession, each less than the TC time after the previous one (or
 #: at the same instant), after which it counts as jammed: in an enduring contact with several
@@ -450,6 +459,68 @@ def _hop(i, j, nx, ny, nz, inv_mi, inv_mj, st, acc, rec, tc):
     return True
 
 
+@njit(inline="always")
+def _hop_speed(i, w, t, flight, walls, tc):
+    """(v·n_w [m/s], v_hop = a_n t_c / 2 [m/s]) of sphere i against wall w at time t [s],
+    a_n being what its own motion presses it into w with (its acceleration there, plus c²/ρ
+    along a cylinder's inside); v_hop is 0 where w does not press it or the TC model is off."""
+    a_n, vn = pressed(i, w, t, flight.st, walls, flight.acc[i])
+    if not a_n > 0.0 or tc <= 0.0:
+        return vn, 0.0
+    return vn, 0.5 * a_n * tc
+
+
+@njit(inline="always")
+def _needs_two_supports(p, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling):
+    """Whether sphere p slides or rolls slower than the landing speed on a fixed flat wall
+    whose slope it cannot rest on alone (_can_rest)."""
+    m = flight.mstate[p]
+    w = flight.mplane[p]
+    if (m != MS_SLIDING and m != MS_ROLLING) or w < 0 or not _flat_fixed(walls, w):
+        return False
+    st = flight.st
+    v_land = fsc[F_LANDING_SPEED]
+    return (st[p, 3] ** 2 + st[p, 4] ** 2 + st[p, 5] ** 2 <= v_land * v_land
+            and not _can_rest(p, flight, dyn, walls, gravity, pair_table, friction, rolling))
+
+
+@njit
+def rests_on_two_planes(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                        rolling):
+    """Whether sphere i, sliding or rolling slower than the landing speed on a fixed flat wall
+    whose slope it cannot rest on alone, meets the fixed flat wall w pressed into it and
+    slower than a hop (:func:`_wall_hop`) [OURS]: a contact with two walls at once that may
+    hold it, which the cluster solve takes as a support by both (rest in the corner where
+    friction holds it there, else constrained motion along it) instead of a hop. Hops there
+    fed a limit cycle: a sphere rolled down an incline into a wall, hopped off it, rolled up,
+    stopped, rolled back and hopped again, and never came to rest
+    (docs/enduring-contact.md, "Two supports")."""
+    if w == flight.mplane[i] or not _flat_fixed(walls, w) or not _needs_two_supports(
+            i, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling):
+        return False
+    vn, v_hop = _hop_speed(i, w, t, flight, walls, fsc[F_TC_TIME])
+    return v_hop > 0.0 and vn < v_hop and -vn <= v_hop
+
+
+@njit
+def rests_on_plane_and_sphere(p, q, flight, dyn, walls, gravity, pair_table, fsc, friction,
+                              rolling):
+    """Whether sphere p, sliding or rolling slower than the landing speed on a fixed flat wall
+    whose slope it cannot rest on alone, meets sphere q at rest [OURS]: the plane and q may
+    hold it together, which the cluster solve decides (as :func:`rests_on_two_planes`). As a
+    collision (elastic where the staged model is, at such speeds) a sphere on a 19° incline
+    in a pocket of resting spheres bounced between them at 0.2 mm/s for ever."""
+    return flight.mstate[q] == MS_REST and _needs_two_supports(
+        p, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling)
+
+
+@njit(inline="always")
+def _flat_fixed(walls, w):
+    """Wall w is a fixed plane or the face of a fixed finite wall."""
+    kind = walls.planes_kind[w]
+    return kind == WK_PLANE or kind == WK_FACE
+
+
 @njit
 def _wall_hop(i, w, t, ax, ay, az, ci, inv_mi, flight, walls, rec, tc):
     """A hop of sphere i, on a wall of normal a = (ax, ay, az), off a fixed wall w that its
@@ -470,12 +541,9 @@ def _wall_hop(i, w, t, ax, ay, az, ci, inv_mi, flight, walls, rec, tc):
     so it stays on its wall), and the sphere meets w again a TC time later: it follows the
     side in chords of c t_c. The kinetic energy it adds is booked as negative dissipation.
     Returns False (nothing done) where w does not press the sphere or it meets faster."""
-    st, acc = flight.st, flight.acc
-    a_n, vn = pressed(i, w, t, st, walls, acc[i])
-    if not a_n > 0.0 or tc <= 0.0:
-        return False
-    v_hop = 0.5 * a_n * tc
-    if vn >= v_hop or -vn > v_hop:
+    st = flight.st
+    vn, v_hop = _hop_speed(i, w, t, flight, walls, tc)
+    if not v_hop > 0.0 or vn >= v_hop or -vn > v_hop:
         return False
     nx, ny, nz = walls.planes_n[w, 0], walls.planes_n[w, 1], walls.planes_n[w, 2]
     scale = (v_hop - vn) / (1.0 - ci * ci)

@@ -25,18 +25,20 @@ effects = [{effects}]
 [output]
 frame_interval = {duration}
 [enduring_contact]
-treatment = "clusters"
+treatment = "{treatment}"
 [[contacts]]
 between = ["steel", "steel"]
 sliding_friction = {mu}
 restitution = {e}
+rolling_friction = {mu_r}
 """
 
 
 def scene(body, duration=0.2, gravity=(0.0, 0.0, -G), mu=0.3, e=0.5,
-          effects='"gravity", "rotation", "friction"'):
+          effects='"gravity", "rotation", "friction"', treatment="clusters", mu_r=0.0):
     return parse_scene(HEAD.format(duration=duration, gravity=", ".join(num(g) for g in gravity),
-                                   effects=effects, mu=mu, e=e) + body)
+                                   effects=effects, mu=mu, e=e, treatment=treatment,
+                                   mu_r=mu_r) + body)
 
 
 def groove(beta):
@@ -95,10 +97,11 @@ def test_sphere_sliding_down_a_frictionless_slope_comes_to_rest_in_the_corner():
     np.testing.assert_allclose(sim.pos[0], (xc, 0.0, zc), atol=1e-9 * R)
 
 
-def _corner_case(seed):
+def _corner_case(seed, **kw):
     """A sphere let go above an incline (θ) that ends against a vertical wall at x = 0: every
     parameter drawn from ``seed`` (the single-sphere corners of tools/robustness.py's incline
-    kind, where the pairwise rules stopped at the guard in 16 of 20 such draws)."""
+    kind, where the pairwise rules stopped at the guard in 16 of 20 such draws); ``kw`` go to
+    :func:`scene`."""
     rng = np.random.default_rng(seed)
     th = math.radians(rng.uniform(2.0, 40.0))
     e, mu = rng.uniform(0.1, 0.95), rng.uniform(0.05, 0.8)
@@ -108,7 +111,7 @@ def _corner_case(seed):
     wall = plane(("0.0", "0.0", "0.0"), ("1.0", "0.0", "0.0"))
     body = incline + wall + sphere(tuple(num(c) for c in start),
                                    (num(rng.uniform(-0.1, 0.1)), "0.0", "0.0"))
-    return th, scene(body, duration=1.0, mu=mu, e=e)
+    return th, scene(body, duration=1.0, mu=mu, e=e, **kw)
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -116,6 +119,21 @@ def test_sphere_rolling_down_an_incline_into_a_wall_comes_to_rest_in_the_corner(
     """Whatever the incline, restitution and friction, the sphere bounces and rolls down into
     the corner and comes to rest there, R from the wall and R from the incline."""
     th, sc = _corner_case(seed)
+    sim = Simulation(sc)
+    sim.run()
+    assert sim.mstate[0] == MS_REST
+    np.testing.assert_allclose(sim.pos[0], (R, 0.0, (R + R * math.sin(th)) / math.cos(th)),
+                               atol=1e-9 * R)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_the_pairwise_rules_hand_a_slow_sphere_pressed_into_a_second_plane_to_a_solve(seed):
+    """With the pairwise rules and rolling resistance, the sphere of the same corners comes to
+    rest there too: rolling down into the wall slower than a hop, it is handed to the cluster
+    solve, which holds it on both planes (hsgran._settling.rests_on_two_planes). Hopped off
+    the wall instead, it rolled up, stopped, rolled back and hopped again, for ever."""
+    th, sc = _corner_case(seed, treatment="pairwise", mu_r=0.008,
+                          effects='"gravity", "rotation", "friction", "rolling_resistance"')
     sim = Simulation(sc)
     sim.run()
     assert sim.mstate[0] == MS_REST
@@ -171,7 +189,7 @@ def test_an_unknown_treatment_is_a_one_line_error_naming_the_key():
     from hsgran.errors import InputError
 
     text = HEAD.format(duration=0.1, gravity="0.0, 0.0, -9.81", effects='"gravity"', mu=0.3,
-                       e=0.5).replace('treatment = "clusters"', 'treatment = "soft"')
+                       e=0.5, treatment="soft", mu_r=0.0)
     with pytest.raises(InputError, match=r"enduring_contact\.treatment.*'pairwise', 'clusters'"):
         parse_scene(text + FLOOR + sphere(("0.0", "0.0", "0.002")))
 
