@@ -48,6 +48,7 @@ from hsgran._flight import (
     ball,
     curved,
     enter_plane,
+    flat_fixed,
     halt,
     leave_plane,
     min_image,
@@ -98,7 +99,7 @@ from hsgran.contact.model import (
 from hsgran.materials import P_E_FIXED, P_MU_R, P_MU_S
 from hsgran.motion import NEVER
 from hsgran.onplane import END_NONE, END_RESOLVE, MS_FLIGHT, MS_REST, MS_SUPPORTED
-from hsgran.wallspec import BL_RADIUS, CY_RADIUS, WK_FACE, WK_PLANE
+from hsgran.wallspec import BL_RADIUS, CY_RADIUS
 
 #: A segment of constant accelerations lasts until a contact between spheres has moved
 #: tangentially by this fraction of σ [-]: the contact normal then turns by 1e-4 rad and the
@@ -841,8 +842,7 @@ def _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, 
             mplane[s] = code
             flight.seg_end[s] = NEVER
             flight.seg_code[s] = END_NONE
-        elif count == 1 and plane >= 0 and (walls.planes_kind[plane] == WK_PLANE
-                                             or walls.planes_kind[plane] == WK_FACE):
+        elif count == 1 and plane >= 0 and flat_fixed(walls, plane):
             # on one plane (or face) only: the paper's plate (MODEL §5.3)
             leave_plane(s, flight, dyn, gravity, rotation)
             enter_plane(s, np.int64(plane), t, np.int64(END_NONE), flight, dyn, walls, gravity,

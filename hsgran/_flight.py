@@ -327,9 +327,15 @@ def immovable(walls, w):
     """Whether wall w neither moves nor turns: a fixed plane, a part of a finite wall, a fixed
     sphere, or a cylinder at rest (a sphere wedged against it may be stopped,
     hsgran._settling)."""
-    kind = walls.planes_kind[w]
-    return kind == WK_PLANE or kind == WK_FACE or kind == WK_BALL or (
+    return flat_fixed(walls, w) or walls.planes_kind[w] == WK_BALL or (
         curved(walls, w) and not turning(walls, w))
+
+
+@njit(inline="always")
+def flat_fixed(walls, w):
+    """Whether wall w is a fixed plane or the face of a fixed finite wall (flat, at rest)."""
+    kind = walls.planes_kind[w]
+    return kind == WK_PLANE or kind == WK_FACE
 
 
 @njit(inline="always")

@@ -32,6 +32,7 @@ from hsgran._flight import (
     ball,
     curved,
     enter_plane,
+    flat_fixed,
     halt,
     holds_now,
     immovable,
@@ -83,7 +84,6 @@ from hsgran.onplane import (
     holds_still,
     load_and_pull,
 )
-from hsgran.wallspec import WK_FACE, WK_PLANE
 
 #: Events of one sphere in succession, each less than the TC time after the previous one (or
 #: at the same instant), after which it counts as jammed: in an enduring contact with several
@@ -407,8 +407,9 @@ def _dissipative_friction(i, j, nx, ny, nz, jx, jy, jz, bi, bj, ci, cj, inv_mi, 
     # on j
     cx, cy, cz = ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx
     lin = quad = 0.0  # kinetic energy E(s) = E(0) + lin s + quad s²
+    mi, mj = 1.0 / inv_m[i], 1.0 / inv_m[j]
     for k in range(3):
-        for p, d, mass in ((i, dvi[k], 1.0 / inv_m[i]), (j, dvj[k], 1.0 / inv_m[j])):
+        for p, d, mass in ((i, dvi[k], mi), (j, dvj[k], mj)):
             lin += mass * (st[p, 3 + k] - d) * d
             quad += 0.5 * mass * d * d
     if rotation:
@@ -536,7 +537,7 @@ def _needs_two_supports(p, flight, dyn, walls, gravity, pair_table, fsc, frictio
     whose slope it cannot rest on alone (_can_rest)."""
     m = flight.mstate[p]
     w = flight.mplane[p]
-    if (m != MS_SLIDING and m != MS_ROLLING) or w < 0 or not _flat_fixed(walls, w):
+    if (m != MS_SLIDING and m != MS_ROLLING) or w < 0 or not flat_fixed(walls, w):
         return False
     st = flight.st
     v_land = fsc[F_LANDING_SPEED]
@@ -555,7 +556,7 @@ def rests_on_two_planes(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, f
     fed a limit cycle: a sphere rolled down an incline into a wall, hopped off it, rolled up,
     stopped, rolled back and hopped again, and never came to rest
     (docs/enduring-contact.md, "Two supports")."""
-    if w == flight.mplane[i] or not _flat_fixed(walls, w) or not _needs_two_supports(
+    if w == flight.mplane[i] or not flat_fixed(walls, w) or not _needs_two_supports(
             i, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling):
         return False
     vn, v_hop = _hop_speed(i, w, t, flight, walls, fsc[F_TC_TIME])
@@ -572,13 +573,6 @@ def rests_on_plane_and_sphere(p, q, flight, dyn, walls, gravity, pair_table, fsc
     in a pocket of resting spheres bounced between them at 0.2 mm/s for ever."""
     return flight.mstate[q] == MS_REST and _needs_two_supports(
         p, flight, dyn, walls, gravity, pair_table, fsc, friction, rolling)
-
-
-@njit(inline="always")
-def _flat_fixed(walls, w):
-    """Wall w is a fixed plane or the face of a fixed finite wall."""
-    kind = walls.planes_kind[w]
-    return kind == WK_PLANE or kind == WK_FACE
 
 
 @njit
