@@ -362,7 +362,8 @@ def _unpack(nc, x, scale, stride, ca, cb, cn, crb, mu, slip, mur, reff, rslip, i
     """Impulses from the vector x (:func:`_pack`), projected onto what each contact allows
     (P_n ≥ 0; P_t in the Coulomb cone, or along −slip for a contact that slips; the rolling
     couple within μ_r R* P_n, or along −rslip), and the bodies' velocities ``v``, ``w`` they
-    make from those without contacts, ``v0``, ``w0``."""
+    make from those without contacts, ``v0``, ``w0`` (the first ``v0.shape[0]`` bodies: those
+    of the contacts)."""
     for k in range(nc):
         if scale[k, 0] == 0.0:
             continue
@@ -386,7 +387,7 @@ def _unpack(nc, x, scale, stride, ca, cb, cn, crb, mu, slip, mur, reff, rslip, i
                 s = scale[k, 2]
                 hr[k, 0], hr[k, 1], hr[k, 2] = cap(x[o + 4] / s, x[o + 5] / s, x[o + 6] / s,
                                                    limit)
-    for i in range(v.shape[0]):
+    for i in range(v0.shape[0]):
         for j in range(3):
             v[i, j] = v0[i, j]
             w[i, j] = w0[i, j]
@@ -395,9 +396,10 @@ def _unpack(nc, x, scale, stride, ca, cb, cn, crb, mu, slip, mur, reff, rslip, i
 
 @njit
 def _free(nc, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, v0, w0):
-    """The bodies' velocities without the contacts' impulses, into ``v0``, ``w0``: ``v``,
-    ``w`` less what ``pn``, ``pt``, ``hr`` make (the inverse of :func:`start`)."""
-    for i in range(v.shape[0]):
+    """The velocities of the contacts' bodies (the first ``v0.shape[0]``) without the contacts'
+    impulses, into ``v0``, ``w0``: ``v``, ``w`` less what ``pn``, ``pt``, ``hr`` make (the
+    inverse of :func:`start`)."""
+    for i in range(v0.shape[0]):
         for j in range(3):
             v0[i, j] = v[i, j]
             w0[i, j] = w[i, j]
@@ -427,7 +429,8 @@ def _combine(hist, x, g, f, dg, df, gram):
     gamma = np.linalg.solve(a, rhs)
     x[:] = g
     for p in range(hist):
-        x -= gamma[p] * dg[p]
+        for i in range(x.shape[0]):  # (in place: no temporary per term)
+            x[i] -= gamma[p] * dg[p, i]
 
 
 @njit(inline="always")
@@ -473,7 +476,12 @@ def _accelerated(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, i
     g_old, f_old = np.empty(n), np.empty(n)
     dg, df = np.empty((memory, n)), np.empty((memory, n))
     gram = np.empty((memory, memory))
-    v0, w0 = np.empty_like(v), np.empty_like(w)
+    # the contacts' bodies only: the caller's arrays may hold many more rows (the scratch of
+    # the largest cluster), which the acceleration's every combination would otherwise copy
+    nbody = 0
+    for k in range(nc):
+        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    v0, w0 = np.empty((nbody, 3)), np.empty((nbody, 3))
     _free(nc, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, v0, w0)
     _pack(nc, pn, pt, hr, scale, stride, x)
     hist = 0  # differences remembered

@@ -415,3 +415,28 @@ def test_a_small_cluster_is_solved_as_before_the_acceleration():
     np.testing.assert_array_equal(runs[0].v, runs[1].v)
     np.testing.assert_array_equal(runs[0].w, runs[1].w)
     np.testing.assert_array_equal(runs[0].pt, runs[1].pt)
+
+
+def test_spare_rows_of_the_body_arrays_change_nothing():
+    """The engine hands the solver its scratch arrays, with a row for every body of the largest
+    cluster it can hold: an accelerated solve (a column of 20, past ANDERSON_AFTER sweeps)
+    gives the same impulses and velocities, bit for bit, with 50 spare rows after the
+    contacts' bodies, and leaves the spare rows as they were."""
+    n, spare = 20, 50
+    tight, roomy = _column(n), _column(n)
+    for name in ("inv_m", "inv_i", "rad"):
+        setattr(roomy, name, np.concatenate([getattr(roomy, name), np.full(spare, 7.0)]))
+    rng = np.random.default_rng(3)
+    roomy.v = np.concatenate([roomy.v, rng.normal(size=(spare, 3))])
+    roomy.w = np.concatenate([roomy.w, rng.normal(size=(spare, 3))])
+    left_v, left_w = roomy.v[n:].copy(), roomy.w[n:].copy()
+    assert tight.solve() <= SOLVE_TOL
+    roomy.solve()
+    assert tight.sweeps > ANDERSON_AFTER
+    assert roomy.sweeps == tight.sweeps
+    np.testing.assert_array_equal(roomy.pn, tight.pn)
+    np.testing.assert_array_equal(roomy.pt, tight.pt)
+    np.testing.assert_array_equal(roomy.v[:n], tight.v)
+    np.testing.assert_array_equal(roomy.w[:n], tight.w)
+    np.testing.assert_array_equal(roomy.v[n:], left_v)
+    np.testing.assert_array_equal(roomy.w[n:], left_w)
