@@ -62,7 +62,9 @@ class TrajectoryObserver:
                                  "simulated_time": summary.simulated_time,
                                  "wall_time": summary.wall_time,
                                  "events_per_second": summary.events_per_second,
-                                 "interrupted": summary.interrupted})
+                                 "interrupted": summary.interrupted,
+                                 "solver_sweeps": summary.solver_sweeps,
+                                 "solver_visits": summary.solver_visits})
 
 
 def open_writer(path, scene: Scene, sim: Simulation, *, log_events: bool,

@@ -173,13 +173,19 @@ class RunSummary:
     events_per_second: float = 0.0  #: all executed events (collisions and cell crossings) / s
     interrupted: bool = False  #: the run stopped early because ``stop()`` said so
     notes: list = field(default_factory=list)  #: what a user should know about the scene
+    #: Gauss–Seidel sweeps of the cluster solves (docs/enduring-contact.md, "Clusters of
+    #: contacts") and the contacts they visited (sweeps × contacts): the treatment's work
+    solver_sweeps: int = 0
+    solver_visits: int = 0
 
     def lines(self) -> list[str]:
         """Human-readable summary."""
         by_kind = ", ".join(f"{k} {v:,}" for k, v in self.events.items() if v)
-        return [f"events: {by_kind or 'none'}",
-                f"simulated time {self.simulated_time:.6g} s, wall time {self.wall_time:.3f} s, "
-                f"{self.events_per_second:,.0f} events/s"] + [f"note: {n}" for n in self.notes]
+        solver = ([f"cluster solves: {self.solver_sweeps:,} sweeps, "
+                   f"{self.solver_visits:,} contact visits"] if self.solver_visits else [])
+        return [f"events: {by_kind or 'none'}"] + solver + [
+            f"simulated time {self.simulated_time:.6g} s, wall time {self.wall_time:.3f} s, "
+            f"{self.events_per_second:,.0f} events/s"] + [f"note: {n}" for n in self.notes]
 
 
 #: The note of a scene with gravity whose collisions lose no normal energy.
@@ -791,6 +797,7 @@ class Simulation:
         """
         t_end = self.scene.duration if until is None else float(until)
         counts0 = self.counts.copy()
+        sweeps0, visits0 = int(self.isc[es.I_SWEEPS]), int(self.isc[es.I_VISITS])
         done0 = self.collisions
         t_ck = (math.inf if not checkpoint_every
                 else (math.floor(self.time / checkpoint_every) + 1) * checkpoint_every)
@@ -857,7 +864,9 @@ class Simulation:
         summary = RunSummary(events=events, simulated_time=min(self.time, t_end), wall_time=wall,
                              collisions=events["pair"] + events["wall"],
                              events_per_second=executed / wall if wall > 0 else math.inf,
-                             interrupted=interrupted, notes=list(self.notes))
+                             interrupted=interrupted, notes=list(self.notes),
+                             solver_sweeps=int(self.isc[es.I_SWEEPS]) - sweeps0,
+                             solver_visits=int(self.isc[es.I_VISITS]) - visits0)
         for ob in observers:
             if hasattr(ob, "on_finish"):
                 ob.on_finish(summary)

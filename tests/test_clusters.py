@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from hsgran._state import I_SWEEPS, I_VISITS
 from hsgran.engine import Simulation
 from hsgran.onplane import MS_REST, MS_SLIDING
 from hsgran.scene import parse_scene
@@ -346,3 +347,23 @@ def test_a_sphere_put_on_a_plane_it_does_not_touch_flies_and_is_not_moved(lift):
     else:
         assert flight.mstate[0] != MS_FLIGHT
         assert sim.pos[0][2] == pytest.approx(R, abs=PLANE_TOUCHING_REL * R)
+
+
+def test_the_run_summary_reports_the_cluster_solves_work():
+    """A run with cluster solves (a sphere dropped into a V groove) says in its summary how many
+    sweeps its solves took and how many contacts they visited; the numbers are those the
+    engine counted in the call, and a run without solves (the same sphere dropped on a plate,
+    pairwise) prints no such line."""
+    sim = Simulation(scene(groove(math.radians(45.0))
+                           + sphere(("0.0", num(0.3 * R), num(3 * R)))))
+    summary = sim.run()
+    assert summary.solver_sweeps > 0
+    assert summary.solver_visits >= summary.solver_sweeps
+    assert (summary.solver_sweeps, summary.solver_visits) == (int(sim.isc[I_SWEEPS]),
+                                                              int(sim.isc[I_VISITS]))
+    assert (f"cluster solves: {summary.solver_sweeps:,} sweeps, "
+            f"{summary.solver_visits:,} contact visits") in summary.lines()
+    plain = Simulation(scene(FLOOR + sphere(("0.0", "0.0", num(3 * R))), treatment="pairwise"))
+    quiet = plain.run()
+    assert quiet.solver_visits == 0
+    assert not any(line.startswith("cluster solves") for line in quiet.lines())

@@ -125,7 +125,9 @@ def simulate(scene: Scene, trajectory: str | os.PathLike | None = None,
             executed = sum(counts.get(k, 0) for k in ("pair", "wall", "cell"))
             log.trajectory.on_finish(RunSummary(
                 events=counts, simulated_time=scene.duration, wall_time=wall,
-                events_per_second=executed / wall if wall > 0 else math.inf))
+                events_per_second=executed / wall if wall > 0 else math.inf,
+                solver_sweeps=part1.solver_sweeps + part2.solver_sweeps,
+                solver_visits=part1.solver_visits + part2.solver_visits))
     finally:
         if writer is not None:
             writer.close()
