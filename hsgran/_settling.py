@@ -362,13 +362,21 @@ def _support_cos(sx, sy, sz, bx, by, bz):
 
 
 @njit(inline="always")
+def _off_support(x, y, z, bx, by, bz):
+    """What a backed sphere keeps of an impulse (x, y, z) [N s]: all but its part along its
+    support's unit normal b, which the support takes."""
+    xb = x * bx + y * by + z * bz
+    return x - xb * bx, y - xb * by, z - xb * bz
+
+
+@njit(inline="always")
 def _backed_velocity(p, v0x, v0y, v0z, jx, jy, jz, bx, by, bz, st, inv_m):
     """Velocity of a backed sphere p after the impulse J [N s] on it: its support (unit normal
     b) takes J·b."""
-    jn = jx * bx + jy * by + jz * bz
-    st[p, 3] = v0x + inv_m[p] * (jx - jn * bx)
-    st[p, 4] = v0y + inv_m[p] * (jy - jn * by)
-    st[p, 5] = v0z + inv_m[p] * (jz - jn * bz)
+    kx, ky, kz = _off_support(jx, jy, jz, bx, by, bz)
+    st[p, 3] = v0x + inv_m[p] * kx
+    st[p, 4] = v0y + inv_m[p] * ky
+    st[p, 5] = v0z + inv_m[p] * kz
 
 
 @njit(inline="always")
@@ -377,9 +385,8 @@ def _friction_push(tx, ty, tz, c, b, inv_m_full, inv_m_used):
     collision: backed by its support (c > 0, unit normal b), its support takes t·b
     (_backed_velocity); else as the collision applied it (``inv_m_used``, 0 if held)."""
     if c > 0.0:
-        tb = tx * b[0] + ty * b[1] + tz * b[2]
-        return (inv_m_full * (tx - tb * b[0]), inv_m_full * (ty - tb * b[1]),
-                inv_m_full * (tz - tb * b[2]))
+        kx, ky, kz = _off_support(tx, ty, tz, b[0], b[1], b[2])
+        return inv_m_full * kx, inv_m_full * ky, inv_m_full * kz
     return inv_m_used * tx, inv_m_used * ty, inv_m_used * tz
 
 
