@@ -75,6 +75,7 @@ from hsgran._state import (
     FL_ROLLING,
     FL_ROTATION,
     FL_VISCOUS,
+    I_FROZEN,
     I_SHORT,
     I_STEP_SWEEPS,
     I_SWEEPS,
@@ -587,7 +588,7 @@ def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol, grow):
     """:func:`hsgran.contact.cluster.solve_polished` on the cluster's contacts, with the
     bodies' velocities (or the step's end velocities) ``v``, ``w`` and the immovable partners'
     ``vb``; with ``grow``, a solve that stalls stops short; returns (sweeps, worst,
-    stalled)."""
+    stalled, frozen)."""
     return solve_polished(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, vb, clus.ck_tgt,
                           clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip,
                           clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, v, w, clus.ck_pn,
@@ -596,13 +597,15 @@ def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol, grow):
 
 
 @njit(inline="always")
-def _count(isc, sweeps, nc, step):
-    """Book a solve's work: its sweeps (a step's force solve: also I_STEP_SWEEPS) and the
-    contacts they visited."""
+def _count(isc, sweeps, nc, step, frozen):
+    """Book a solve's work: its sweeps (a step's force solve: also I_STEP_SWEEPS), the
+    contacts they visited, and whether its friction was frozen unconverged (I_FROZEN)."""
     isc[I_SWEEPS] += sweeps
     if step:
         isc[I_STEP_SWEEPS] += sweeps
     isc[I_VISITS] += sweeps * nc
+    if frozen:
+        isc[I_FROZEN] += 1
 
 
 @njit
@@ -620,9 +623,9 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
             clus.cl_al[b, k] = clus.cl_w[b, k] if rotation and not held else 0.0
     for c in range(nc):
         _cold(c, clus)
-    sweeps, worst, _ = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
-                                      False, False, SOLVE_TOL_REL * space.slack[0], False)
-    _count(isc, sweeps, nc, True)
+    sweeps, worst, _, _ = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
+                                         False, False, SOLVE_TOL_REL * space.slack[0], False)
+    _count(isc, sweeps, nc, True, False)
     if worst > space.slack[0]:
         for b in range(nb):
             if clus.cl_depth[b] >= 0:
@@ -637,10 +640,10 @@ def _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling, grow):
     the fallback :func:`_unsolved_step` (counted in ``isc[I_UNSOLVED]``). Returns whether it
     was solved; with ``grow``, False at once where the solve stalls (the caller solves a
     larger cluster)."""
-    sweeps, worst, stalled = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab,
-                                            rotation, friction, rolling,
-                                            SOLVE_TOL_REL * space.slack[0], grow)
-    _count(isc, sweeps, nc, True)
+    sweeps, worst, stalled, frozen = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab,
+                                                    rotation, friction, rolling,
+                                                    SOLVE_TOL_REL * space.slack[0], grow)
+    _count(isc, sweeps, nc, True, frozen)
     if stalled:
         return False
     if worst > space.slack[0]:
@@ -880,10 +883,10 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
     rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
     e0 = _kinetic(nb, clus, rotation)
     _impact_setup(nc, clus, pair_table, dyn.mat, rec, fsc, flags)
-    sweeps, worst, stalled = _solve_cluster(nc, clus, clus.cl_v, clus.cl_w, clus.ck_vb,
-                                            rotation, friction, rolling,
-                                            SOLVE_TOL_REL * space.slack[0], not final)
-    _count(isc, sweeps, nc, False)
+    sweeps, worst, stalled, frozen = _solve_cluster(nc, clus, clus.cl_v, clus.cl_w, clus.ck_vb,
+                                                    rotation, friction, rolling,
+                                                    SOLVE_TOL_REL * space.slack[0], not final)
+    _count(isc, sweeps, nc, False, frozen)
     if stalled:
         return math.nan
     for k in range(rec.shape[0]):

@@ -157,7 +157,10 @@ I_SHORT = 10  #: cluster segments cut to the shortest (MIN_SEGMENT_REL)
 I_UNSOLVED = 11  #: cluster force solves that ended short of the slack (not converged)
 I_STEP_SWEEPS = 12  #: the part of I_SWEEPS spent on the steps' force solves
 I_VISITS = 13  #: contacts visited by the cluster solves (sweeps × contacts: the solves' work)
-I_SIZE = 14
+#: cluster solves whose friction and rolling couples were frozen before they converged
+#: (hsgran.contact.cluster.solve_polished: FRICTION_SWEEPS reached, or a stall)
+I_FROZEN = 14
+I_SIZE = 15
 
 # the sums of one frame interval (``obs``, hsgran._observe), observables on only
 OB_MOMENT = 0  #: Σ b ⊗ J over the contacts' impulses [kg m²/s], 3 × 3 row-major (9 entries)

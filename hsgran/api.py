@@ -64,7 +64,8 @@ class TrajectoryObserver:
                                  "events_per_second": summary.events_per_second,
                                  "interrupted": summary.interrupted,
                                  "solver_sweeps": summary.solver_sweeps,
-                                 "solver_visits": summary.solver_visits})
+                                 "solver_visits": summary.solver_visits,
+                                 "solver_frozen": summary.solver_frozen})
 
 
 def open_writer(path, scene: Scene, sim: Simulation, *, log_events: bool,

@@ -85,8 +85,9 @@ VISITS_PER_CALL = 100_000_000
 #: and ``face_lines``, and the edges' column ``CY_FINITE`` of ``planes_cyl``; 13: the count
 #: of walls every prediction looks at ``n_global``, in place of their rows; 14: the cluster
 #: solves' warm-start forces under gravity with either treatment, since the pairwise rules
-#: hand zero-time sequences over to cluster solves).
-CHECKPOINT_VERSION = 14
+#: hand zero-time sequences over to cluster solves; 15: the count of cluster solves whose
+#: friction was frozen unconverged, ``I_FROZEN``).
+CHECKPOINT_VERSION = 15
 
 
 class SimulationError(HsgranError):
@@ -177,12 +178,17 @@ class RunSummary:
     #: contacts") and the contacts they visited (sweeps × contacts): the treatment's work
     solver_sweeps: int = 0
     solver_visits: int = 0
+    #: of those solves, how many froze their friction and rolling couples before these had
+    #: converged (``FRICTION_SWEEPS`` reached, or a stall): friction holds there only to the
+    #: accuracy its sweeps reached
+    solver_frozen: int = 0
 
     def lines(self) -> list[str]:
         """Human-readable summary."""
         by_kind = ", ".join(f"{k} {v:,}" for k, v in self.events.items() if v)
         solver = ([f"cluster solves: {self.solver_sweeps:,} sweeps, "
-                   f"{self.solver_visits:,} contact visits"] if self.solver_visits else [])
+                   f"{self.solver_visits:,} contact visits, friction frozen unconverged in "
+                   f"{self.solver_frozen:,}"] if self.solver_visits else [])
         return [f"events: {by_kind or 'none'}"] + solver + [
             f"simulated time {self.simulated_time:.6g} s, wall time {self.wall_time:.3f} s, "
             f"{self.events_per_second:,.0f} events/s"] + [f"note: {n}" for n in self.notes]
@@ -798,6 +804,7 @@ class Simulation:
         t_end = self.scene.duration if until is None else float(until)
         counts0 = self.counts.copy()
         sweeps0, visits0 = int(self.isc[es.I_SWEEPS]), int(self.isc[es.I_VISITS])
+        frozen0 = int(self.isc[es.I_FROZEN])
         done0 = self.collisions
         t_ck = (math.inf if not checkpoint_every
                 else (math.floor(self.time / checkpoint_every) + 1) * checkpoint_every)
@@ -866,7 +873,8 @@ class Simulation:
                              events_per_second=executed / wall if wall > 0 else math.inf,
                              interrupted=interrupted, notes=list(self.notes),
                              solver_sweeps=int(self.isc[es.I_SWEEPS]) - sweeps0,
-                             solver_visits=int(self.isc[es.I_VISITS]) - visits0)
+                             solver_visits=int(self.isc[es.I_VISITS]) - visits0,
+                             solver_frozen=int(self.isc[es.I_FROZEN]) - frozen0)
         for ob in observers:
             if hasattr(ob, "on_finish"):
                 ob.on_finish(summary)

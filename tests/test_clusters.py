@@ -8,7 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from hsgran._state import I_SWEEPS, I_VISITS
+from hsgran._cluster import _count
+from hsgran._state import I_FROZEN, I_SIZE, I_STEP_SWEEPS, I_SWEEPS, I_VISITS
 from hsgran.engine import Simulation
 from hsgran.onplane import MS_REST, MS_SLIDING
 from hsgran.scene import parse_scene
@@ -349,20 +350,31 @@ def test_a_sphere_put_on_a_plane_it_does_not_touch_flies_and_is_not_moved(lift):
         assert sim.pos[0][2] == pytest.approx(R, abs=PLANE_TOUCHING_REL * R)
 
 
+def test_the_engine_books_a_solve_whose_friction_froze():
+    """hsgran._cluster._count books a solve's sweeps (a step's also as step sweeps), the
+    contacts they visited (sweeps × contacts), and one frozen solve (I_FROZEN) where its
+    friction was frozen before it converged."""
+    isc = np.zeros(I_SIZE, np.int64)
+    _count(isc, 12, 5, True, True)
+    _count(isc, 3, 4, False, False)
+    assert (isc[I_SWEEPS], isc[I_STEP_SWEEPS], isc[I_VISITS], isc[I_FROZEN]) == (15, 12, 72, 1)
+
+
 def test_the_run_summary_reports_the_cluster_solves_work():
     """A run with cluster solves (a sphere dropped into a V groove) says in its summary how many
-    sweeps its solves took and how many contacts they visited; the numbers are those the
-    engine counted in the call, and a run without solves (the same sphere dropped on a plate,
-    pairwise) prints no such line."""
+    sweeps its solves took, how many contacts they visited and in how many friction froze
+    unconverged; the numbers are those the engine counted in the call, and a run without
+    solves (the same sphere dropped on a plate, pairwise) prints no such line."""
     sim = Simulation(scene(groove(math.radians(45.0))
                            + sphere(("0.0", num(0.3 * R), num(3 * R)))))
     summary = sim.run()
     assert summary.solver_sweeps > 0
     assert summary.solver_visits >= summary.solver_sweeps
-    assert (summary.solver_sweeps, summary.solver_visits) == (int(sim.isc[I_SWEEPS]),
-                                                              int(sim.isc[I_VISITS]))
+    assert (summary.solver_sweeps, summary.solver_visits, summary.solver_frozen) == (
+        int(sim.isc[I_SWEEPS]), int(sim.isc[I_VISITS]), int(sim.isc[I_FROZEN]))
     assert (f"cluster solves: {summary.solver_sweeps:,} sweeps, "
-            f"{summary.solver_visits:,} contact visits") in summary.lines()
+            f"{summary.solver_visits:,} contact visits, friction frozen unconverged in "
+            f"{summary.solver_frozen:,}") in summary.lines()
     plain = Simulation(scene(FLOOR + sphere(("0.0", "0.0", num(3 * R))), treatment="pairwise"))
     quiet = plain.run()
     assert quiet.solver_visits == 0

@@ -242,7 +242,7 @@ def test_a_scene_runs_and_is_reported(capsys):
     assert row["ev_frame"] == 6
     assert row["outcome"] == "completed"
     # nothing has landed by 0.05 s: no cluster solve has worked yet
-    assert (row["solver_sweeps"], row["solver_visits"]) == (0, 0)
+    assert (row["solver_sweeps"], row["solver_visits"], row["solver_frozen"]) == (0, 0, 0)
     lines = rb.summary([row])
     assert lines[-1].startswith("scenes 1, completed 1 (100%), guard 0, timeout 0, error 0")
     assert rb.format_row(row).split()[:4] == [spec.id, spec.kind, str(spec.n), "completed"]

@@ -67,7 +67,8 @@ kind (hsgran.events.kinds), and, from frames every :data:`FRAME_INTERVAL`:
   wedge;
 - the cluster solves' work: their Gauss–Seidel sweeps and the contacts those visited
   (``solver_sweeps``, ``solver_visits``; docs/enduring-contact.md), where a dense scene's
-  time goes.
+  time goes, and how many of them froze their friction before it converged
+  (``solver_frozen``: friction there holds only to the accuracy its sweeps reached).
 
 Output: one line per scene as it ends; then the table in scene order, the message of every
 scene that did not complete, outcomes by kind and a summary line (scenes, completed %, guard,
@@ -101,7 +102,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from hsgran._state import I_SWEEPS, I_VISITS
+from hsgran._state import I_FROZEN, I_SWEEPS, I_VISITS
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_WALL, EVENT_NAMES
 from hsgran.placement import Space, overlapping_pairs
 from hsgran.precompile import VERSIONS, compile_all, jit_disabled
@@ -950,6 +951,7 @@ class Probe:
             out["events"] = {k: int(v) for k, v in counts if k != "none"}
             out["solver_sweeps"] = int(self.sim.isc[I_SWEEPS])
             out["solver_visits"] = int(self.sim.isc[I_VISITS])
+            out["solver_frozen"] = int(self.sim.isc[I_FROZEN])
         return out
 
 
@@ -968,8 +970,8 @@ def run_scene_text(text: str, emit=None) -> dict:
     Returns:
         A result dict: outcome, message, t_reached [s], cpu [s], events by kind, pair_overlap
         and plane_overlap [-], time_to_rest [s], last_arrival [s], not_arrived, at_rest,
-        bulk_packing [-], probes, dissipated and collision_loss [J], solver_sweeps and
-        solver_visits.
+        bulk_packing [-], probes, dissipated and collision_loss [J], solver_sweeps,
+        solver_visits and solver_frozen.
     """
     from hsgran.engine import Simulation, SimulationError  # the child's import, not the parent's
     from hsgran.onplane import MS_ASLEEP, MS_REST
@@ -1108,7 +1110,8 @@ def make_row(spec: SceneSpec, result: dict, wall: float) -> dict:
            "dissipated": result.get("dissipated"),
            "collision_loss": result.get("collision_loss"),
            "solver_sweeps": result.get("solver_sweeps"),
-           "solver_visits": result.get("solver_visits")}
+           "solver_visits": result.get("solver_visits"),
+           "solver_frozen": result.get("solver_frozen")}
     for name in EVENT_NAMES[1:]:
         row[f"ev_{name}"] = events.get(name)
     return row

@@ -655,16 +655,18 @@ def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
     have no solution either) stops there and returns ``stalled`` True, the impulses
     unfinished; without it, a friction solve's stall freezes the tangential impulses as the
     end of the friction sweeps does, and a frictionless solve runs to MAX_SWEEPS. Returns
-    (sweeps, worst, stalled) as :func:`solve`."""
+    (sweeps, worst, stalled) as :func:`solve`, and whether the tangential impulses were
+    frozen before they converged (friction and rolling then hold only to the accuracy their
+    sweeps reached)."""
     tangential = friction or rolling
     sweeps, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
                                    inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, friction,
                                    rolling, tol, friction_sweeps if tangential else MAX_SWEEPS,
                                    tangential or grow)
     if stalled and grow:
-        return sweeps, worst, True
+        return sweeps, worst, True, False
     if not tangential or (sweeps < friction_sweeps and not stalled):
-        return sweeps, worst, False  # converged (or nothing tangential to freeze)
+        return sweeps, worst, False, False  # converged (or nothing tangential to freeze)
     for _ in range(POLISH_ROUNDS):
         more, worst, _ = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
                                inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, False, False, tol)
@@ -676,4 +678,4 @@ def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
         more, worst, _ = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
                                inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, False, False, tol)
         sweeps += more
-    return sweeps, worst, False
+    return sweeps, worst, False, True

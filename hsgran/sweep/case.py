@@ -127,7 +127,8 @@ def simulate(scene: Scene, trajectory: str | os.PathLike | None = None,
                 events=counts, simulated_time=scene.duration, wall_time=wall,
                 events_per_second=executed / wall if wall > 0 else math.inf,
                 solver_sweeps=part1.solver_sweeps + part2.solver_sweeps,
-                solver_visits=part1.solver_visits + part2.solver_visits))
+                solver_visits=part1.solver_visits + part2.solver_visits,
+                solver_frozen=part1.solver_frozen + part2.solver_frozen))
     finally:
         if writer is not None:
             writer.close()

@@ -73,8 +73,10 @@ class Cluster:
                 SOLVE_TOL)
         if friction_sweeps is None:
             sweeps, worst, self.stalled = solve(*args, max_sweeps, stall, memory)
+            self.frozen = False
         else:
-            sweeps, worst, self.stalled = solve_polished(*args, friction_sweeps, stall)
+            sweeps, worst, self.stalled, self.frozen = solve_polished(*args, friction_sweeps,
+                                                                      stall)
         self.sweeps = sweeps
         return worst
 
@@ -211,9 +213,11 @@ def _pyramid(mu=0.5, mur=0.01):
 def test_polished_solve_meets_the_normal_conditions_where_friction_is_cut_short(friction_sweeps):
     """solve_polished with the tangential sweeps cut short (as where a slipping mode converges
     slowly): the normal velocities still meet their targets to the tolerance and every
-    impulse and rolling couple ends inside its cone, however short the cut."""
+    impulse and rolling couple ends inside its cone, however short the cut; the solve says
+    that it froze them (what the engine counts as I_FROZEN)."""
     c = _pyramid()
     worst = c.solve(rolling=True, friction_sweeps=friction_sweeps)
+    assert c.frozen
     assert worst <= SOLVE_TOL
     cones = np.linalg.norm(c.pt, axis=1) - 0.5 * c.pn
     assert cones.max() <= 1e-15 * c.pn.max()
@@ -226,6 +230,7 @@ def test_polished_solve_that_converges_is_the_plain_solve():
     plain, polished = _pyramid(), _pyramid()
     plain.solve(rolling=True)
     polished.solve(rolling=True, friction_sweeps=10**6)
+    assert not polished.frozen
     assert polished.sweeps == plain.sweeps
     np.testing.assert_array_equal(polished.pn, plain.pn)
     np.testing.assert_array_equal(polished.v, plain.v)
