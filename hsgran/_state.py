@@ -161,6 +161,9 @@ I_VISITS = 13  #: contacts visited by the cluster solves (sweeps × contacts: th
 #: (hsgran.contact.cluster.solve_polished: FRICTION_SWEEPS reached, or a stall)
 I_FROZEN = 14
 I_SIZE = 15
+#: The cluster solves' counters, by the name runs report them under (``RunSummary`` fields,
+#: the trajectory's stored summary, the corpus's columns): one place to add one.
+SOLVER_COUNTS = {"solver_sweeps": I_SWEEPS, "solver_visits": I_VISITS, "solver_frozen": I_FROZEN}
 
 # the sums of one frame interval (``obs``, hsgran._observe), observables on only
 OB_MOMENT = 0  #: Σ b ⊗ J over the contacts' impulses [kg m²/s], 3 × 3 row-major (9 entries)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from hsgran import __version__, materials
-from hsgran.engine import Checkpoint, RunSummary, Simulation, SimulationError
+from hsgran.engine import SOLVER_COUNTS, Checkpoint, RunSummary, Simulation, SimulationError
 from hsgran.errors import InputError
 from hsgran.io.h5md import StoredCheckpoint, TrajectoryWriter, Walls, copy_frames, read_checkpoint
 from hsgran.scene import Scene, load_scene, override_note, parse_scene
@@ -63,9 +63,7 @@ class TrajectoryObserver:
                                  "wall_time": summary.wall_time,
                                  "events_per_second": summary.events_per_second,
                                  "interrupted": summary.interrupted,
-                                 "solver_sweeps": summary.solver_sweeps,
-                                 "solver_visits": summary.solver_visits,
-                                 "solver_frozen": summary.solver_frozen})
+                                 **{k: getattr(summary, k) for k in SOLVER_COUNTS}})
 
 
 def open_writer(path, scene: Scene, sim: Simulation, *, log_events: bool,

@@ -42,7 +42,7 @@ from hsgran import _state as es
 from hsgran._cluster import slack
 from hsgran._exchange import enter_sphere, sphere_energy
 from hsgran._flight import MAX_ZERO_TIME_EVENTS
-from hsgran._state import FIELDS, Sizes, allocate, groups_of, stored_fields
+from hsgran._state import FIELDS, SOLVER_COUNTS, Sizes, allocate, groups_of, stored_fields
 from hsgran.contact import compliance, viscous
 from hsgran.contact.model import REC_SIZE
 from hsgran.errors import HsgranError
@@ -176,6 +176,7 @@ class RunSummary:
     notes: list = field(default_factory=list)  #: what a user should know about the scene
     #: Gauss–Seidel sweeps of the cluster solves (docs/enduring-contact.md, "Clusters of
     #: contacts") and the contacts they visited (sweeps × contacts): the treatment's work
+    #: (these three are the counters named in hsgran._state.SOLVER_COUNTS)
     solver_sweeps: int = 0
     solver_visits: int = 0
     #: of those solves, how many froze their friction and rolling couples before these had
@@ -562,6 +563,10 @@ class Simulation:
                                            self.present[None] if self.scene.open_system else None)
         return float(kin_t[0]), None if kin_r is None else float(kin_r[0]), float(pot[0])
 
+    def solver_counts(self) -> dict:
+        """The cluster solves' counters so far, by name (``_state.SOLVER_COUNTS``)."""
+        return {k: int(self.isc[i]) for k, i in SOLVER_COUNTS.items()}
+
     def mechanical_energy(self, t: float | None = None) -> float:
         """Kinetic (both kinds) plus potential energy of all spheres at ``t`` [J] (see
         :meth:`energies_at`)."""
@@ -803,8 +808,7 @@ class Simulation:
         """
         t_end = self.scene.duration if until is None else float(until)
         counts0 = self.counts.copy()
-        sweeps0, visits0 = int(self.isc[es.I_SWEEPS]), int(self.isc[es.I_VISITS])
-        frozen0 = int(self.isc[es.I_FROZEN])
+        solver0 = self.solver_counts()
         done0 = self.collisions
         t_ck = (math.inf if not checkpoint_every
                 else (math.floor(self.time / checkpoint_every) + 1) * checkpoint_every)
@@ -872,9 +876,7 @@ class Simulation:
                              collisions=events["pair"] + events["wall"],
                              events_per_second=executed / wall if wall > 0 else math.inf,
                              interrupted=interrupted, notes=list(self.notes),
-                             solver_sweeps=int(self.isc[es.I_SWEEPS]) - sweeps0,
-                             solver_visits=int(self.isc[es.I_VISITS]) - visits0,
-                             solver_frozen=int(self.isc[es.I_FROZEN]) - frozen0)
+                             **{k: v - solver0[k] for k, v in self.solver_counts().items()})
         for ob in observers:
             if hasattr(ob, "on_finish"):
                 ob.on_finish(summary)

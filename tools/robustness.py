@@ -102,7 +102,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from hsgran._state import I_FROZEN, I_SWEEPS, I_VISITS
+from hsgran._state import SOLVER_COUNTS
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_WALL, EVENT_NAMES
 from hsgran.placement import Space, overlapping_pairs
 from hsgran.precompile import VERSIONS, compile_all, jit_disabled
@@ -949,9 +949,7 @@ class Probe:
             out["t_reached"] = self.sim.time
             counts = zip(EVENT_NAMES, self.sim.counts, strict=True)
             out["events"] = {k: int(v) for k, v in counts if k != "none"}
-            out["solver_sweeps"] = int(self.sim.isc[I_SWEEPS])
-            out["solver_visits"] = int(self.sim.isc[I_VISITS])
-            out["solver_frozen"] = int(self.sim.isc[I_FROZEN])
+            out.update(self.sim.solver_counts())
         return out
 
 
@@ -1109,9 +1107,7 @@ def make_row(spec: SceneSpec, result: dict, wall: float) -> dict:
            "bulk_packing": result.get("bulk_packing"), "probes": result.get("probes"),
            "dissipated": result.get("dissipated"),
            "collision_loss": result.get("collision_loss"),
-           "solver_sweeps": result.get("solver_sweeps"),
-           "solver_visits": result.get("solver_visits"),
-           "solver_frozen": result.get("solver_frozen")}
+           **{k: result.get(k) for k in SOLVER_COUNTS}}
     for name in EVENT_NAMES[1:]:
         row[f"ev_{name}"] = events.get(name)
     return row

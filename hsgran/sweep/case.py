@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from hsgran.api import TrajectoryObserver, open_writer
-from hsgran.engine import EventBlock, RunSummary, Simulation
+from hsgran.engine import SOLVER_COUNTS, EventBlock, RunSummary, Simulation
 from hsgran.errors import HsgranError, InputError
 from hsgran.events.kinds import EV_PAIR, EV_WALL
 from hsgran.onplane import MS_ASLEEP, MS_REST
@@ -126,9 +126,7 @@ def simulate(scene: Scene, trajectory: str | os.PathLike | None = None,
             log.trajectory.on_finish(RunSummary(
                 events=counts, simulated_time=scene.duration, wall_time=wall,
                 events_per_second=executed / wall if wall > 0 else math.inf,
-                solver_sweeps=part1.solver_sweeps + part2.solver_sweeps,
-                solver_visits=part1.solver_visits + part2.solver_visits,
-                solver_frozen=part1.solver_frozen + part2.solver_frozen))
+                **{k: getattr(part1, k) + getattr(part2, k) for k in SOLVER_COUNTS}))
     finally:
         if writer is not None:
             writer.close()
