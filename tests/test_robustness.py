@@ -48,6 +48,7 @@ def test_every_scene_of_the_corpus_parses(specs):
         assert scene.effects.gravity
         assert scene.effects.rolling_resistance == (spec.params["friction"] == "rolling")
         assert scene.effects.plasticity == (spec.params["restitution"] is None)
+        assert scene.effects.viscoelastic_damping == (spec.params["damping"] is not None)
 
 
 def test_the_draws_cover_the_parameter_space(specs):
@@ -88,6 +89,68 @@ def test_the_draws_cover_the_parameter_space(specs):
     assert all(6 <= k <= 32 for k in sides)
     assert {s.expected_rest for s in specs} == {True, False}
     assert not any(s.expected_rest for s in specs if s.kind == "chute")
+    staged = [q for q in p if q["restitution"] is None]
+    assert {q["damping"] is None for q in staged} == {True, False}
+    assert all(q["damping"] is None for q in p if q["restitution"] is not None)
+    damped_e = [q["damped_restitution"] for q in staged if q["damping"] is not None]
+    assert min(damped_e) < 0.72
+    assert max(damped_e) > 0.93
+    assert all(0.7 <= x <= 0.95 for x in damped_e)
+
+
+def test_only_scenes_whose_impacts_always_lose_energy_are_expected_to_rest(specs):
+    """Expected to rest: rolling resistance, no periodic axis, and a fixed restitution or
+    the staged model with damping; undamped staged impacts below the yield speed are
+    elastic, and a sphere bouncing straight up and down on a floor never stops."""
+    for spec in specs:
+        q = spec.params
+        lossy = q["restitution"] is not None or q["damping"] is not None
+        assert spec.expected_rest == (q["friction"] == "rolling" and spec.kind != "chute"
+                                      and lossy), spec.id
+    assert any(s.expected_rest and s.params["damping"] is not None for s in specs)
+    assert any(s.params["restitution"] is None and s.params["damping"] is None
+               and s.params["friction"] == "rolling" and s.kind != "chute" for s in specs)
+
+
+def test_a_damped_scene_has_its_drawn_restitution(specs):
+    """Every material of a damped scene is the built-in one with the drawn dissipative
+    constant A, and the reference pair (its first sphere material on itself, at the mean
+    radius) then has the drawn restitution at DAMPING_SPEED (docs/model.md §3.11), to the
+    table's interpolation."""
+    from hsgran.contact.viscous import viscoelastic_restitution
+    from hsgran.materials import BUILTIN_MATERIALS, effective_modulus, solid_sphere_mass
+    damped = [s for s in specs if s.params["damping"] is not None]
+    assert len(damped) > 20
+    for spec in damped:
+        scene = parse_scene(spec.text, source=spec.id)
+        q = spec.params
+        for name in dict.fromkeys(q["materials"] + [q["wall"]]):
+            m = scene.library.material(name)
+            builtin = BUILTIN_MATERIALS[name]
+            assert m.dissipative_constant == pytest.approx(q["damping"], rel=1e-8)
+            for key in ("density", "youngs_modulus", "poisson_ratio", "yield_stress"):
+                assert getattr(m, key) == pytest.approx(getattr(builtin, key), rel=1e-8)
+        m = scene.library.material(q["materials"][0])
+        r = q["d_mean"] / 2.0
+        e = viscoelastic_restitution(rb.DAMPING_SPEED, solid_sphere_mass(m.density, r) / 2.0,
+                                     r / 2.0, effective_modulus(m, m), m.dissipative_constant)
+        assert e == pytest.approx(q["damped_restitution"], abs=1e-4), spec.id
+
+
+def test_the_damping_draw_leaves_every_other_draw(specs, monkeypatch):
+    """The damping comes from a generator of its own: without it (DAMPED_SHARE 0) a
+    scene with a fixed restitution is the same text, and a damped one the same draws but
+    for its damping."""
+    monkeypatch.setattr(rb, "DAMPED_SHARE", 0.0)
+    for spec in specs[:60]:
+        plain = rb.draw_scene(0, int(spec.id.split("-")[1]))
+        if spec.params["restitution"] is not None:
+            assert plain.text == spec.text
+        rest = {k: v for k, v in spec.params.items()
+                if k not in ("damping", "damped_restitution")}
+        assert {k: v for k, v in plain.params.items()
+                if k not in ("damping", "damped_restitution")} == rest
+        assert plain.params["damping"] is None
 
 
 def test_max_count_caps_n_and_keeps_the_other_draws(specs):

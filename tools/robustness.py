@@ -17,7 +17,10 @@ them pass. Figures only, no pass/fail (exit code 0 whatever the outcomes; 2 on b
 - N spheres, log-uniform in [100, 3000] (``--max-count M``: log-uniform in [100, M], the
   other draws unchanged);
 - a fixed restitution e in [0.1, 0.95] for every pair, or the staged normal model (effect
-  ``plasticity``, no fixed restitution: below the yield speed impacts are elastic);
+  ``plasticity``, no fixed restitution: below the yield speed impacts are elastic); half of
+  the staged scenes also lose energy below the yield speed (effect ``viscoelastic_damping``,
+  docs/model.md §3.11: :func:`_draw_damping`, from a generator of its own, so every other
+  draw is the same with it or without it);
 - frictionless, sliding friction μ in [0, 0.8] (effects ``rotation``, ``friction``), or
   that and rolling friction μ_r in [0, 0.02] (``rolling_resistance``);
 - base radius r in [0.5, 2] mm and a ratio q in [1, 3]: one fill with radii uniform in
@@ -37,8 +40,14 @@ them pass. Figures only, no pass/fail (exit code 0 whatever the outcomes; 2 on b
 - the duration: the fall time from the top of the fill region to the bed surface plus
   :data:`SETTLE_TIME` (chutes: plus :data:`CHUTE_FLOW_TIME`; their spheres never stop).
 
-A scene is **expected to come to rest** when it has friction and rolling resistance and is
-not periodic (a chute tilts gravity by 5–30°, more than any μ_r ≤ 0.02 holds).
+A scene is **expected to come to rest** when it has friction and rolling resistance, is
+not periodic (a chute tilts gravity by 5–30°, more than any μ_r ≤ 0.02 holds), and its
+impacts lose energy however slow they are: a fixed restitution, or the staged model with
+damping. Without damping the staged model's impacts below the yield speed are perfectly
+elastic (docs/model.md §9), and the built-in pairs yield at 0.04–36 m/s (alumina on alumina
+never), far above a settling bed's speeds: a sphere left bouncing straight up and down on a
+floor, which no friction slows, bounces for ever (corpus 0-34 before the damping was drawn:
+five glass spheres at up to 2.6 cm/s after 1 s, e = 1 below V_y = 36 m/s).
 
 **What is measured** per scene (:func:`run_scene_text`, in the scene's own process, killed
 after ``--timeout`` seconds of wall time): the outcome (``completed``; ``guard``, the collapse
@@ -103,7 +112,9 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from hsgran._state import SOLVER_COUNTS
+from hsgran.contact.viscous import E_VISC, SQRT_X_NODES, damping_number
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_WALL, EVENT_NAMES
+from hsgran.materials import BUILTIN_MATERIALS, effective_modulus, solid_sphere_mass
 from hsgran.placement import Space, overlapping_pairs
 from hsgran.precompile import VERSIONS, compile_all, jit_disabled
 from hsgran.scene import TREATMENTS
@@ -124,6 +135,19 @@ COUNT_RANGE = (100, 3000)
 RESTITUTION_RANGE = (0.1, 0.95)
 #: Probability of a fixed restitution (else the staged model with plasticity).
 FIXED_RESTITUTION_SHARE = 0.6
+#: Share of the staged scenes drawn with viscous damping below the yield speed (effect
+#: ``viscoelastic_damping``; the others keep the paper's elastic impacts there) [-].
+DAMPED_SHARE = 0.5
+#: Restitution of a damped scene's reference pair (its first sphere material on itself, at
+#: the mean radius) at DAMPING_SPEED [-]: hard beads such as glass rebound at about 0.9 and
+#: above at such speeds (e.g. Foerster et al. 1994, Phys. Fluids 6, 1108), and the range goes
+#: down to lossier pairs. Its top, 0.95, still brings a bouncing sphere to rest within
+#: the SETTLE_TIME (corpus 0-34, docs/enduring-contact.md).
+DAMPED_RESTITUTION_RANGE = (0.7, 0.95)
+#: Impact speed at which a damped scene's restitution is drawn [m/s]: a bed's collisions.
+DAMPING_SPEED = 0.1
+#: Second entry of the seed of the damping draw's own generator (``[scene seed, this]``).
+DAMPING_STREAM = 1
 #: Friction modes and their probabilities: none, sliding friction, sliding and rolling.
 FRICTION_MODES = {"none": 0.25, "sliding": 0.35, "rolling": 0.40}
 #: Largest sliding friction coefficient μ_s [-].
@@ -330,6 +354,8 @@ class SceneSpec:
         """The parameters in one short string."""
         p = self.params
         e = "staged" if p["restitution"] is None else f"e={p['restitution']:.2f}"
+        if p.get("damping") is not None:
+            e += f"+visc(e={p['damped_restitution']:.2f}@{DAMPING_SPEED:g}m/s)"
         fr = {"none": "mu=0", "sliding": f"mu={p['mu']:.2f}",
               "rolling": f"mu={p['mu']:.2f},mur={p['mu_r']:.3f}"}[p["friction"]]
         size = f"r={p['radius'] * 1e3:.2f}mm×{p['ratio']:.2f}{'mix' if p['mixture'] else ''}"
@@ -393,6 +419,30 @@ def _draw_contact(rng) -> dict:
     return dict(restitution=e, friction=mode, mu=mu, mu_r=mu_r)
 
 
+def _draw_damping(seed: int, contact: dict, spheres: dict) -> dict:
+    """Viscous damping of a staged scene: for DAMPED_SHARE of them, the dissipative
+    constant A [s] (docs/model.md §3.11) that gives the reference pair (the first sphere
+    material on itself, both of the mean radius) the restitution e, drawn uniform in
+    DAMPED_RESTITUTION_RANGE, at DAMPING_SPEED; every material of the scene gets this A, so
+    every pair has it. Drawn from ``default_rng([seed, DAMPING_STREAM])``, not the scene's
+    generator, so that the other draws stay as they were. Returns ``damping`` (A, or None)
+    and ``damped_restitution`` (e, or None)."""
+    none = dict(damping=None, damped_restitution=None)
+    if contact["restitution"] is not None:
+        return none
+    rng = np.random.default_rng([seed, DAMPING_STREAM])
+    if rng.random() >= DAMPED_SHARE:
+        return none
+    e = float(rng.uniform(*DAMPED_RESTITUTION_RANGE))
+    m = BUILTIN_MATERIALS[spheres["materials"][0]]
+    r = spheres["d_mean"] / 2.0
+    # X = β v0^(1/5) is linear in A; e_visc(X) falls monotonically along the table
+    x = float(np.interp(e, E_VISC[::-1], SQRT_X_NODES[::-1])) ** 2
+    per_a = damping_number(DAMPING_SPEED, solid_sphere_mass(m.density, r) / 2.0, r / 2.0,
+                           effective_modulus(m, m), 1.0)
+    return dict(damping=x / per_a, damped_restitution=e)
+
+
 def draw_scene(corpus_seed: int, index: int, *, max_count: int = COUNT_RANGE[1],
                kind: str | None = None, settle_time: float = SETTLE_TIME,
                sid: str | None = None) -> SceneSpec:
@@ -415,6 +465,7 @@ def draw_scene(corpus_seed: int, index: int, *, max_count: int = COUNT_RANGE[1],
     n = round(_log_uniform(rng, COUNT_RANGE[0], hi))
     spheres = _draw_spheres(rng, n)
     contact = _draw_contact(rng)
+    contact.update(_draw_damping(seed, contact, spheres))
     drop = float(rng.uniform(*DROP_RANGE))
     speed = float(rng.uniform(0.0, FILL_SPEED_MAX))
     depth = _log_uniform(rng, *BED_DEPTH_RANGE)
@@ -430,7 +481,8 @@ def draw_scene(corpus_seed: int, index: int, *, max_count: int = COUNT_RANGE[1],
                   **contact, drop=drop, speed=speed, bed_depth=depth, geometry=geometry,
                   fill_counts=[f[0] for f in spheres["fills"]], bed_height=h_bed,
                   fill_bottom=z0, fall_time=fall, scene_seed=seed)
-    expected = contact["friction"] == "rolling" and not any(container.periodic)
+    lossy = contact["restitution"] is not None or contact["damping"] is not None
+    expected = contact["friction"] == "rolling" and not any(container.periodic) and lossy
     duration = float(f"{fall + after:.4g}")
     sid = sid or f"{corpus_seed}-{index}"
     text = scene_text(sid, kind, container, spheres, contact, z0, speed, duration,
@@ -690,8 +742,11 @@ def scene_text(sid: str, kind: str, c: Container, spheres: dict, contact: dict, 
         effects.append("rolling_resistance")
     if contact["restitution"] is None:
         effects.append("plasticity")
-    compact = {k: params[k] for k in ("n", "restitution", "friction", "mu", "mu_r", "radius",
-                                      "ratio", "mixture", "drop", "speed", "geometry")}
+    if contact["damping"] is not None:
+        effects.append("viscoelastic_damping")
+    keys = ("n", "restitution", "damping", "friction", "mu", "mu_r", "radius", "ratio",
+            "mixture", "drop", "speed", "geometry")
+    compact = {k: params[k] for k in keys if k != "damping" or params[k] is not None}
     lines = [f"# robustness corpus scene {sid} (tools/robustness.py), kind {kind}",
              f"# expected to come to rest: {'yes' if expected else 'no'}",
              f"# parameters: {json.dumps(compact)}",
@@ -702,6 +757,15 @@ def scene_text(sid: str, kind: str, c: Container, spheres: dict, contact: dict, 
         lines.append(f"periodic = {json.dumps(list(c.periodic))}")
     lines += ["[output]", f"frame_interval = {_num(FRAME_INTERVAL)}"]
     names = list(dict.fromkeys(spheres["materials"] + [spheres["wall"]]))
+    if contact["damping"] is not None:  # the built-in materials, with the drawn A
+        for name in names:
+            m = BUILTIN_MATERIALS[name]
+            lines += [f"[materials.{name}]", f"density = {_num(m.density)}",
+                      f"youngs_modulus = {_num(m.youngs_modulus)}",
+                      f"poisson_ratio = {_num(m.poisson_ratio)}",
+                      f"yield_stress = {_num(m.yield_stress)}",
+                      f"surface_energy = {_num(m.surface_energy)}",
+                      f"dissipative_constant = {_num(contact['damping'])}"]
     for i, a in enumerate(names):
         for b in names[i:]:
             lines += ["[[contacts]]", f'between = ["{a}", "{b}"]']
