@@ -44,10 +44,11 @@ A scene is **expected to come to rest** when it has friction and rolling resista
 not periodic (a chute tilts gravity by 5–30°, more than any μ_r ≤ 0.02 holds), and its
 impacts lose energy however slow they are: a fixed restitution, or the staged model with
 damping. Without damping the staged model's impacts below the yield speed are perfectly
-elastic (docs/model.md §9), and the built-in pairs yield at 0.04–36 m/s (alumina on alumina
-never), far above a settling bed's speeds: a sphere left bouncing straight up and down on a
-floor, which no friction slows, bounces for ever (corpus 0-34 before the damping was drawn:
-five glass spheres at up to 2.6 cm/s after 1 s, e = 1 below V_y = 36 m/s).
+elastic (docs/model.md §9), and the built-in materials yield at 0.013–18 m/s sphere on sphere
+and 0.037–36 m/s on a wall (alumina on alumina never): most of a settling bed's last,
+slow impacts return all their normal speed, and a sphere left bouncing straight up and down
+on a floor, which no friction slows, bounces for ever (corpus 0-34 before the damping was
+drawn: five glass spheres at up to 2.6 cm/s after 1 s, e = 1 below V_y = 36 m/s).
 
 **What is measured** per scene (:func:`run_scene_text`, in the scene's own process, killed
 after ``--timeout`` seconds of wall time): the outcome (``completed``; ``guard``, the collapse
@@ -114,7 +115,12 @@ from scipy.spatial import cKDTree
 from hsgran._state import SOLVER_COUNTS
 from hsgran.contact.viscous import E_VISC, SQRT_X_NODES, damping_number
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_WALL, EVENT_NAMES
-from hsgran.materials import BUILTIN_MATERIALS, effective_modulus, solid_sphere_mass
+from hsgran.materials import (
+    BUILTIN_MATERIALS,
+    MATERIAL_KEYS,
+    effective_modulus,
+    solid_sphere_mass,
+)
 from hsgran.placement import Space, overlapping_pairs
 from hsgran.precompile import VERSIONS, compile_all, jit_disabled
 from hsgran.scene import TREATMENTS
@@ -138,15 +144,16 @@ FIXED_RESTITUTION_SHARE = 0.6
 #: Share of the staged scenes drawn with viscous damping below the yield speed (effect
 #: ``viscoelastic_damping``; the others keep the paper's elastic impacts there) [-].
 DAMPED_SHARE = 0.5
-#: Restitution of a damped scene's reference pair (its first sphere material on itself, at
-#: the mean radius) at DAMPING_SPEED [-]: hard beads such as glass rebound at about 0.9 and
-#: above at such speeds (e.g. Foerster et al. 1994, Phys. Fluids 6, 1108), and the range goes
-#: down to lossier pairs. Its top, 0.95, still brings a bouncing sphere to rest within
-#: the SETTLE_TIME (corpus 0-34, docs/enduring-contact.md).
+#: Viscous restitution factor e_visc (docs/model.md §3.11) of a damped scene's reference pair
+#: (its first sphere material on itself, at the mean radius) at DAMPING_SPEED [-]: the pair's
+#: whole restitution there unless it yields below that speed. Hard beads such as glass
+#: rebound at about 0.9 and above at such speeds (e.g. Foerster et al. 1994, Phys. Fluids 6,
+#: 1108), and the range goes down to lossier pairs. Its top, 0.95, still brings a bouncing
+#: sphere to rest within the SETTLE_TIME (corpus 0-34, docs/enduring-contact.md).
 DAMPED_RESTITUTION_RANGE = (0.7, 0.95)
 #: Impact speed at which a damped scene's restitution is drawn [m/s]: a bed's collisions.
 DAMPING_SPEED = 0.1
-#: Second entry of the seed of the damping draw's own generator (``[scene seed, this]``).
+#: Second entry of the seed of the damping draw's own generator (``[scene seed, this]``) [-].
 DAMPING_STREAM = 1
 #: Friction modes and their probabilities: none, sliding friction, sliding and rolling.
 FRICTION_MODES = {"none": 0.25, "sliding": 0.35, "rolling": 0.40}
@@ -354,7 +361,7 @@ class SceneSpec:
         """The parameters in one short string."""
         p = self.params
         e = "staged" if p["restitution"] is None else f"e={p['restitution']:.2f}"
-        if p.get("damping") is not None:
+        if p["damping"] is not None:
             e += f"+visc(e={p['damped_restitution']:.2f}@{DAMPING_SPEED:g}m/s)"
         fr = {"none": "mu=0", "sliding": f"mu={p['mu']:.2f}",
               "rolling": f"mu={p['mu']:.2f},mur={p['mu_r']:.3f}"}[p["friction"]]
@@ -419,14 +426,26 @@ def _draw_contact(rng) -> dict:
     return dict(restitution=e, friction=mode, mu=mu, mu_r=mu_r)
 
 
+def dissipative_constant_for(e: float, material, radius: float, speed: float) -> float:
+    """The dissipative constant A [s] that gives two spheres of ``material`` and ``radius``
+    [m] the viscous restitution factor ``e`` [-] at impact speed ``speed`` [m/s]
+    (docs/model.md §3.11): X = β v0^(1/5) is linear in A, and e_visc(X) falls monotonically
+    along its table, which is inverted exactly (both linear in √X)."""
+    x = float(np.interp(e, E_VISC[::-1], SQRT_X_NODES[::-1])) ** 2
+    m_eff = solid_sphere_mass(material.density, radius) / 2.0  # two equal spheres
+    return x / damping_number(speed, m_eff, radius / 2.0, effective_modulus(material, material),
+                              1.0)
+
+
 def _draw_damping(seed: int, contact: dict, spheres: dict) -> dict:
     """Viscous damping of a staged scene: for DAMPED_SHARE of them, the dissipative
-    constant A [s] (docs/model.md §3.11) that gives the reference pair (the first sphere
-    material on itself, both of the mean radius) the restitution e, drawn uniform in
-    DAMPED_RESTITUTION_RANGE, at DAMPING_SPEED; every material of the scene gets this A, so
-    every pair has it. Drawn from ``default_rng([seed, DAMPING_STREAM])``, not the scene's
-    generator, so that the other draws stay as they were. Returns ``damping`` (A, or None)
-    and ``damped_restitution`` (e, or None)."""
+    constant A [s] that gives the reference pair (the first sphere material on itself, both
+    of the mean radius) the viscous factor e, drawn uniform in DAMPED_RESTITUTION_RANGE, at
+    DAMPING_SPEED; every material of the scene gets this A, so every pair has it (a sphere
+    on a wall, whose damping number is 2^(1/5) times smaller, a little less: e = 0.956 for
+    0.95). Drawn from ``default_rng([seed, DAMPING_STREAM])``, not the scene's generator,
+    so that the other draws stay as they were. Returns ``damping`` (A, or None) and
+    ``damped_restitution`` (e, or None)."""
     none = dict(damping=None, damped_restitution=None)
     if contact["restitution"] is not None:
         return none
@@ -434,13 +453,9 @@ def _draw_damping(seed: int, contact: dict, spheres: dict) -> dict:
     if rng.random() >= DAMPED_SHARE:
         return none
     e = float(rng.uniform(*DAMPED_RESTITUTION_RANGE))
-    m = BUILTIN_MATERIALS[spheres["materials"][0]]
-    r = spheres["d_mean"] / 2.0
-    # X = β v0^(1/5) is linear in A; e_visc(X) falls monotonically along the table
-    x = float(np.interp(e, E_VISC[::-1], SQRT_X_NODES[::-1])) ** 2
-    per_a = damping_number(DAMPING_SPEED, solid_sphere_mass(m.density, r) / 2.0, r / 2.0,
-                           effective_modulus(m, m), 1.0)
-    return dict(damping=x / per_a, damped_restitution=e)
+    a = dissipative_constant_for(e, BUILTIN_MATERIALS[spheres["materials"][0]],
+                                 spheres["d_mean"] / 2.0, DAMPING_SPEED)
+    return dict(damping=a, damped_restitution=e)
 
 
 def draw_scene(corpus_seed: int, index: int, *, max_count: int = COUNT_RANGE[1],
@@ -759,13 +774,10 @@ def scene_text(sid: str, kind: str, c: Container, spheres: dict, contact: dict, 
     names = list(dict.fromkeys(spheres["materials"] + [spheres["wall"]]))
     if contact["damping"] is not None:  # the built-in materials, with the drawn A
         for name in names:
-            m = BUILTIN_MATERIALS[name]
-            lines += [f"[materials.{name}]", f"density = {_num(m.density)}",
-                      f"youngs_modulus = {_num(m.youngs_modulus)}",
-                      f"poisson_ratio = {_num(m.poisson_ratio)}",
-                      f"yield_stress = {_num(m.yield_stress)}",
-                      f"surface_energy = {_num(m.surface_energy)}",
-                      f"dissipative_constant = {_num(contact['damping'])}"]
+            m = replace(BUILTIN_MATERIALS[name],
+                        dissipative_constant=contact["damping"])
+            lines.append(f"[materials.{name}]")
+            lines += [f"{key} = {_num(getattr(m, key))}" for key in MATERIAL_KEYS]
     for i, a in enumerate(names):
         for b in names[i:]:
             lines += ["[[contacts]]", f'between = ["{a}", "{b}"]']
