@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 
 from hsgran._flight import MAX_ZERO_TIME_EVENTS
+from hsgran.effects import Effects
 from hsgran.engine import Simulation, SimulationError
+from hsgran.impact import sphere_sphere_impact
+from hsgran.materials import BUILTIN_MATERIALS, MATERIAL_KEYS, P_VISC, pair_row
 from hsgran.placement import Space
 from hsgran.scene import parse_scene
 from tests.scenes import FLOOR, sphere
@@ -118,9 +121,6 @@ def test_a_damped_scene_has_its_drawn_restitution(specs):
     of the reference pair (its first sphere material on itself, at the mean radius) at
     DAMPING_SPEED, run by the collision model itself (hsgran.impact), has its restitution
     lowered by the drawn factor (docs/model.md §3.11), to the table's interpolation."""
-    from hsgran.effects import Effects
-    from hsgran.impact import sphere_sphere_impact
-    from hsgran.materials import BUILTIN_MATERIALS, MATERIAL_KEYS, P_VISC, pair_row
     damped = [s for s in specs if s.params["damping"] is not None]
     assert len(damped) > 20
     staged = Effects(plasticity=True)
