@@ -113,7 +113,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from hsgran._state import SOLVER_COUNTS
-from hsgran.contact.viscous import E_VISC, SQRT_X_NODES, damping_number
+from hsgran.contact.viscous import dissipative_constant_for
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_WALL, EVENT_NAMES
 from hsgran.materials import (
     BUILTIN_MATERIALS,
@@ -426,15 +426,13 @@ def _draw_contact(rng) -> dict:
     return dict(restitution=e, friction=mode, mu=mu, mu_r=mu_r)
 
 
-def dissipative_constant_for(e: float, material, radius: float, speed: float) -> float:
+def pair_dissipative_constant(e: float, material, radius: float, speed: float) -> float:
     """The dissipative constant A [s] that gives two spheres of ``material`` and ``radius``
     [m] the viscous restitution factor ``e`` [-] at impact speed ``speed`` [m/s]
-    (docs/model.md §3.11): X = β v0^(1/5) is linear in A, and e_visc(X) falls monotonically
-    along its table, which is inverted exactly (both linear in √X)."""
-    x = float(np.interp(e, E_VISC[::-1], SQRT_X_NODES[::-1])) ** 2
+    (hsgran.contact.viscous.dissipative_constant_for, docs/model.md §3.11)."""
     m_eff = solid_sphere_mass(material.density, radius) / 2.0  # two equal spheres
-    return x / damping_number(speed, m_eff, radius / 2.0, effective_modulus(material, material),
-                              1.0)
+    return dissipative_constant_for(e, speed, m_eff, radius / 2.0,
+                                    effective_modulus(material, material))
 
 
 def _draw_damping(seed: int, contact: dict, spheres: dict) -> dict:
@@ -453,7 +451,7 @@ def _draw_damping(seed: int, contact: dict, spheres: dict) -> dict:
     if rng.random() >= DAMPED_SHARE:
         return none
     e = float(rng.uniform(*DAMPED_RESTITUTION_RANGE))
-    a = dissipative_constant_for(e, BUILTIN_MATERIALS[spheres["materials"][0]],
+    a = pair_dissipative_constant(e, BUILTIN_MATERIALS[spheres["materials"][0]],
                                  spheres["d_mean"] / 2.0, DAMPING_SPEED)
     return dict(damping=a, damped_restitution=e)
 

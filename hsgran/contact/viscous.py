@@ -84,6 +84,32 @@ def restitution_of(x_damp):
     return (1.0 - w) * E_VISC[i] + w * E_VISC[i + 1]
 
 
+def damping_number_for(e: float) -> float:
+    """The damping number X at which e_visc(X) = e [-]: the inverse of :func:`restitution_of`,
+    exact for its interpolation (e_visc falls monotonically along the table, and both are
+    linear in √X between its nodes).
+
+    Raises:
+        ValueError: ``e`` is not in [e_visc(X_MAX), 1] (X_MAX = 100, the table's end).
+    """
+    if not E_VISC[-1] <= e <= 1.0:  # (a NaN, from a broken table or input, too)
+        raise ValueError(f"restitution {e!r}: viscoelastic damping gives e in "
+                         f"[{E_VISC[-1]:.3g}, 1]")
+    if e == 1.0:
+        return 0.0  # (exactly: interpolation from the node next to it leaves rounding)
+    return float(np.interp(e, E_VISC[::-1], SQRT_X_NODES[::-1])) ** 2
+
+
+def dissipative_constant_for(e: float, v0: float, m_eff: float, r_eff: float,
+                             e_star: float) -> float:
+    """The dissipative constant A [s] that gives a pair the viscous restitution ``e`` [-] at
+    normal impact speed ``v0`` [m/s] (m* [kg], R* [m], E* [Pa] of the pair): X is linear in
+    A (see the module), so A = X(e) / (X for A = 1 s). For choosing a material's
+    ``dissipative_constant`` from a measured restitution (docs/model.md §3.11); 0 for e = 1.
+    Raises ValueError as :func:`damping_number_for`."""
+    return damping_number_for(e) / damping_number(v0, m_eff, r_eff, e_star, 1.0)
+
+
 @njit
 def viscoelastic_restitution(v0, m_eff, r_eff, e_star, a_diss):
     """Normal restitution of viscoelastic spheres at impact speed v0 (docs/model.md §3.11) [-].

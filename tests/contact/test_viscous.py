@@ -23,7 +23,14 @@ from hsgran.dem.single import resolved_pair_impact, resolved_wall_impact
 from hsgran.dem.viscoelastic import STEPS, restitution
 from hsgran.effects import Effects
 from hsgran.impact import oblique_velocity, sphere_sphere_impact, sphere_wall_impact
-from hsgran.materials import BUILTIN_MATERIALS, Contact, critical_values, pair_row
+from hsgran.materials import (
+    BUILTIN_MATERIALS,
+    Contact,
+    critical_values,
+    effective_modulus,
+    pair_row,
+    solid_sphere_mass,
+)
 
 B = BUILTIN_MATERIALS
 #: The series' coefficients (Ramírez et al. 1999): e = 1 − C1 X + C2 X² + O(X^(5/2)).
@@ -110,3 +117,29 @@ def test_off_leaves_the_paper_unchanged():
     fixed = sphere_wall_impact(mat, B["rigid"], 1e-3, oblique_velocity(0.05, 0.0),
                                contact=Contact(restitution=0.6), effects=VISCOUS)
     assert fixed.e_n == 0.6  # a prescribed restitution bypasses the effect (MODEL §3.9)
+
+
+#: The inverse is exact for the table's interpolation: only rounding is left.
+INVERSE_TOL = 1e-12
+
+
+@pytest.mark.parametrize("e", [0.999, 0.95, 0.8, 0.5, 0.1])
+def test_dissipative_constant_for_gives_that_restitution(e):
+    """A material with the constant dissipative_constant_for returns gives e at that speed,
+    through the impulse model (a sphere on a rigid wall: m* = m, R* = R)."""
+    steel = _viscous_steel(yield_stress=math.inf)
+    m = solid_sphere_mass(steel.density, 1e-3)
+    e_star = effective_modulus(steel, B["rigid"])
+    for v in (1e-3, 0.1, 10.0):
+        a = viscous.dissipative_constant_for(e, v, m, 1e-3, e_star)
+        got = sphere_wall_impact(dataclasses.replace(steel, dissipative_constant=a), B["rigid"],
+                                 1e-3, oblique_velocity(v, 0.0), contact=Contact(),
+                                 effects=VISCOUS)
+        assert got.e_n == pytest.approx(e, abs=INVERSE_TOL), v
+
+
+def test_dissipative_constant_for_elastic_is_zero_and_refuses_what_it_cannot_give():
+    assert viscous.dissipative_constant_for(1.0, 0.1, 1e-5, 1e-3, 1e11) == 0.0
+    for bad in (1.5, -0.1, float("nan"), 0.5 * viscous.E_VISC[-1]):
+        with pytest.raises(ValueError, match="restitution"):
+            viscous.dissipative_constant_for(bad, 0.1, 1e-5, 1e-3, 1e11)
