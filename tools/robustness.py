@@ -452,7 +452,7 @@ def _draw_damping(seed: int, contact: dict, spheres: dict) -> dict:
         return none
     e = float(rng.uniform(*DAMPED_RESTITUTION_RANGE))
     a = pair_dissipative_constant(e, BUILTIN_MATERIALS[spheres["materials"][0]],
-                                 spheres["d_mean"] / 2.0, DAMPING_SPEED)
+                                  spheres["d_mean"] / 2.0, DAMPING_SPEED)
     return dict(damping=a, damped_restitution=e)
 
 
