@@ -426,10 +426,11 @@ def _draw_contact(rng) -> dict:
     return dict(restitution=e, friction=mode, mu=mu, mu_r=mu_r)
 
 
-def pair_dissipative_constant(e: float, material, radius: float, speed: float) -> float:
+def reference_pair_damping(e: float, material, radius: float, speed: float) -> float:
     """The dissipative constant A [s] that gives two spheres of ``material`` and ``radius``
     [m] the viscous restitution factor ``e`` [-] at impact speed ``speed`` [m/s]
-    (hsgran.contact.viscous.dissipative_constant_for, docs/model.md §3.11)."""
+    (hsgran.contact.viscous.dissipative_constant_for, docs/model.md §3.11). Not
+    hsgran.materials.pair_dissipative_constant, which is a pair's A from its materials'."""
     m_eff = solid_sphere_mass(material.density, radius) / 2.0  # two equal spheres
     return dissipative_constant_for(e, speed, m_eff, radius / 2.0,
                                     effective_modulus(material, material))
@@ -451,8 +452,8 @@ def _draw_damping(seed: int, contact: dict, spheres: dict) -> dict:
     if rng.random() >= DAMPED_SHARE:
         return none
     e = float(rng.uniform(*DAMPED_RESTITUTION_RANGE))
-    a = pair_dissipative_constant(e, BUILTIN_MATERIALS[spheres["materials"][0]],
-                                  spheres["d_mean"] / 2.0, DAMPING_SPEED)
+    a = reference_pair_damping(e, BUILTIN_MATERIALS[spheres["materials"][0]],
+                               spheres["d_mean"] / 2.0, DAMPING_SPEED)
     return dict(damping=a, damped_restitution=e)
 
 

@@ -90,9 +90,11 @@ def damping_number_for(e: float) -> float:
     linear in √X between its nodes).
 
     Raises:
+        RuntimeError: the table could not be loaded (:func:`check_table`).
         ValueError: ``e`` is not in [e_visc(X_MAX), 1] (X_MAX = 100, the table's end).
     """
-    if not E_VISC[-1] <= e <= 1.0:  # (a NaN, from a broken table or input, too)
+    check_table()
+    if not E_VISC[-1] <= e <= 1.0:  # (a NaN too)
         raise ValueError(f"restitution {e!r}: viscoelastic damping gives e in "
                          f"[{E_VISC[-1]:.3g}, 1]")
     if e == 1.0:
@@ -106,7 +108,7 @@ def dissipative_constant_for(e: float, v0: float, m_eff: float, r_eff: float,
     normal impact speed ``v0`` [m/s] (m* [kg], R* [m], E* [Pa] of the pair): X is linear in
     A (see the module), so A = X(e) / (X for A = 1 s). For choosing a material's
     ``dissipative_constant`` from a measured restitution (docs/model.md §3.11); 0 for e = 1.
-    Raises ValueError as :func:`damping_number_for`."""
+    Raises as :func:`damping_number_for`."""
     return damping_number_for(e) / damping_number(v0, m_eff, r_eff, e_star, 1.0)
 
 
