@@ -64,6 +64,7 @@ from hsgran._state import (
     S_R,
     S_V,
 )
+from hsgran.contact.cluster import cap
 from hsgran.contact.model import (
     REC_ENERGY_LOST,
     REC_J_N,
@@ -388,6 +389,56 @@ def _friction_push(tx, ty, tz, c, b, inv_m_full, inv_m_used):
         kx, ky, kz = _off_support(tx, ty, tz, b[0], b[1], b[2])
         return inv_m_full * kx, inv_m_full * ky, inv_m_full * kz
     return inv_m_used * tx, inv_m_used * ty, inv_m_used * tz
+
+
+@njit
+def _support_friction(p, press, bx, by, bz, flight, dyn, walls, pair_table, w, rotation):
+    """Coulomb friction of sphere p's support for the normal impulse ``press`` [N s] that the
+    support took from a backed collision (unit normal b from the support to p) [OURS,
+    docs/enduring-contact.md, "Backing"]: the impulse F on p at its contact point −R b,
+    tangential to b, that stops the point's slip (F = −u_t / (1/m + R²/I), model.md §4's
+    sticking impulse against a body at rest), or, if that exceeds the cone, μ press along
+    it, with μ the sliding friction of p and its support (model.md §4). It acts where the
+    support is at rest: a fixed wall (a plane, a face, a fixed sphere, a cylinder at rest), or
+    the sphere p sleeps on; a moving plane or a turning cylinder gives none here. A stopped
+    slip or one reduced along itself only takes energy away. Without it, a bed on a slope
+    held only its bottom spheres' own weight by friction and slid down as a block (corpus
+    0-69, against LAMMPS: docs/enduring-contact.md, "A bed on a slope, beside soft-sphere
+    DEM")."""
+    if press <= 0.0:
+        return
+    st, mplane, mat = flight.st, flight.mplane, dyn.mat
+    sup = mplane[p]
+    if sup >= 0:
+        if not immovable(walls, sup):
+            return
+        mu = pair_table[mat[p], walls.planes_mat[sup]][P_MU_S]
+    elif sup <= -2:
+        mu = pair_table[mat[p], mat[-2 - sup]][P_MU_S]
+    else:
+        return
+    r = st[p, S_R]
+    inv_m, inv_i = dyn.inv_m[p], dyn.inv_i[p]
+    # velocity of p's material point at −R b (the support's point is at rest)
+    ux, uy, uz = st[p, 3], st[p, 4], st[p, 5]
+    if rotation:
+        ux -= r * (w[1] * bz - w[2] * by)
+        uy -= r * (w[2] * bx - w[0] * bz)
+        uz -= r * (w[0] * by - w[1] * bx)
+    un = ux * bx + uy * by + uz * bz
+    ux -= un * bx
+    uy -= un * by
+    uz -= un * bz
+    w_t = inv_m + (r * r * inv_i if rotation else 0.0)
+    fx, fy, fz = cap(-ux / w_t, -uy / w_t, -uz / w_t, mu * press)
+    st[p, 3] += inv_m * fx
+    st[p, 4] += inv_m * fy
+    st[p, 5] += inv_m * fz
+    if rotation:  # the torque (−R b) × F
+        k = -r * inv_i
+        w[0] += k * (by * fz - bz * fy)
+        w[1] += k * (bz * fx - bx * fz)
+        w[2] += k * (bx * fy - by * fx)
 
 
 @njit
@@ -816,6 +867,13 @@ def collide_pair(i, j, t, nx, ny, nz, dx, dy, dz, flight, dyn, walls, space, gri
                 _dissipative_friction(i, j, nx, ny, nz, jx, jy, jz, (bix, biy, biz),
                                       (bjx, bjy, bjz), ci, cj, inv_mi, inv_mj, inv_ii, inv_ij,
                                       ri, rj, st, wi, wj, inv_m, rotation)
+                # the support's own friction for the normal impulse it took
+                if ci > 0.0:
+                    _support_friction(i, -(jx * bix + jy * biy + jz * biz), bix, biy, biz,
+                                      flight, dyn, walls, pair_table, wi, rotation)
+                if cj > 0.0:
+                    _support_friction(j, jx * bjx + jy * bjy + jz * bjz, bjx, bjy, bjz,
+                                      flight, dyn, walls, pair_table, wj, rotation)
         if not hit or hopped or held_i or held_j or attempt > 0:
             break
         # A sleeper that the collision leaves asleep (see _after_backed) has not moved: the

@@ -314,11 +314,19 @@ def assert_in_the_box_without_overlap(scene, sim):
     assert (d / sigma - 1.0).min() >= -OVERLAP_REL
 
 
+#: When the 2000-sphere pour is checked for rest [s] (at rest by 1.2 s on 2026-11-29).
+POUR_REST_TIME = 1.5
+
+
 @pytest.mark.slow
 def test_pour_of_2000_spheres_settles_to_rest_without_overlap():
     scene = load_scene("tools/scenes/pour.toml")  # 2000 steel spheres, e = 0.5, to 1 s
     sim = Simulation(scene)
-    summary = sim.run()
+    # to POUR_REST_TIME, past the scene's end: the last sphere moving rolls about a cage of
+    # sleepers on the floor (the scene has no rolling friction, so only its collisions slow
+    # it) until 1.1-1.2 s since the floor's friction acts for the load of the bed on it
+    # (docs/enduring-contact.md, "Backing"); the events are counted over the whole run
+    summary = sim.run(until=POUR_REST_TIME)
     motion = sum(summary.events[k] for k in ("pair", "wall", "state", "land"))
     assert motion / scene.n / scene.duration <= POUR_MAX_EVENTS_PER_PARTICLE_S
     assert_at_rest_in_the_box_without_overlap(scene, sim)

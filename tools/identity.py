@@ -15,7 +15,7 @@ loop compiles cold, a few minutes) and compares with the working tree. Exit code
 differs, 2 on bad arguments.
 
 Scenes (end times chosen so that each run takes seconds to a minute):
-    pour   tools/scenes/pour.toml, 2000 spheres poured at e = 0.5, to rest at 1 s
+    pour   tools/scenes/pour.toml, 2000 spheres poured at e = 0.5, to 1 s
     box    scenarios/falling_box.toml, 2500 spheres into a box, to 0.15 s
     plate  scenarios/sphere_on_plate.toml, the paper's sphere on a plate, to 12 s
     gas    an elastic gas of 1000 spheres at packing fraction 0.3 (tools/bench_engine.py's
