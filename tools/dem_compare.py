@@ -52,7 +52,7 @@ sys.path.insert(0, str(ROOT))
 from hsgran.contact.normal import hertz_contact_time  # noqa: E402
 from hsgran.engine import Simulation  # noqa: E402
 from hsgran.errors import HsgranError  # noqa: E402
-from hsgran.materials import effective_modulus  # noqa: E402
+from hsgran.materials import effective_modulus, solid_sphere_mass  # noqa: E402
 from hsgran.scene import TREATMENTS, load_scene  # noqa: E402
 
 #: The fall added to the fastest initial speed for the time step: the box's extent along
@@ -157,8 +157,8 @@ def lammps_config(scene, steps_per_contact: float, times: list[float]) -> dict:
     for a in used:
         for b in used:
             ra, rb = float(r[scene.material == a].min()), float(r[scene.material == b].min())
-            ma = mats[a].density * 4.0 / 3.0 * math.pi * ra**3
-            mb = mats[b].density * 4.0 / 3.0 * math.pi * rb**3
+            ma = solid_sphere_mass(mats[a].density, ra)
+            mb = solid_sphere_mass(mats[b].density, rb)
             tc = min(tc, hertz_contact_time(v_max, ma * mb / (ma + mb), ra * rb / (ra + rb),
                                             effective_modulus(mats[a], mats[b])))
     dt = tc / steps_per_contact
