@@ -64,7 +64,6 @@ from hsgran._state import (
     S_R,
     S_V,
 )
-from hsgran.contact.cluster import cap
 from hsgran.contact.model import (
     REC_ENERGY_LOST,
     REC_J_N,
@@ -73,6 +72,7 @@ from hsgran.contact.model import (
     REC_STAGE,
     resolve,
 )
+from hsgran.contact.tangential import tangential_impulse
 from hsgran.events.kinds import EV_HOP
 from hsgran.materials import P_MU_R, P_MU_S
 from hsgran.motion import NEVER
@@ -395,19 +395,13 @@ def _friction_push(tx, ty, tz, c, b, inv_m_full, inv_m_used):
 def _support_friction(p, press, bx, by, bz, flight, dyn, walls, pair_table, w, rotation):
     """Coulomb friction of sphere p's support for the normal impulse ``press`` [N s] that the
     support took from a backed collision (unit normal b from the support to p) [OURS,
-    docs/enduring-contact.md, "Backing"]: the impulse F on p at its contact point −R b,
-    tangential to b, that stops the point's slip (F = −u_t / (1/m + R²/I), model.md §4's
-    sticking impulse against a body at rest), or, if that exceeds the cone, μ press along
-    it, with μ the sliding friction of p and its support (model.md §4). It acts where the
-    support is at rest: a fixed wall (a plane, a face, a fixed sphere, a cylinder at rest), or
-    the sphere p sleeps on; a moving plane or a turning cylinder gives none here. A stopped
-    slip or one reduced along itself only takes energy away. Without it, a bed on a slope
-    held only its bottom spheres' own weight by friction and slid down as a block (corpus
-    0-69, against LAMMPS: docs/enduring-contact.md, "A bed on a slope, beside soft-sphere
-    DEM")."""
-    if press <= 0.0:
-        return
-    st, mplane, mat = flight.st, flight.mplane, dyn.mat
+    docs/enduring-contact.md, "Backing"]: :func:`foot_friction` with μ the sliding friction
+    of p and its support (model.md §4). It acts where the support is at rest: a fixed wall (a
+    plane, a face, a fixed sphere, a cylinder at rest), or the sphere p sleeps on; a moving
+    plane or a turning cylinder gives none here. Without it, a bed on a slope held only its
+    bottom spheres' own weight by friction and slid down as a block (corpus 0-69, against
+    LAMMPS: docs/enduring-contact.md, "A bed on a slope, beside soft-sphere DEM")."""
+    mplane, mat = flight.mplane, dyn.mat
     sup = mplane[p]
     if sup >= 0:
         if not immovable(walls, sup):
@@ -416,6 +410,21 @@ def _support_friction(p, press, bx, by, bz, flight, dyn, walls, pair_table, w, r
     elif sup <= -2:
         mu = pair_table[mat[p], mat[-2 - sup]][P_MU_S]
     else:
+        return
+    foot_friction(p, press, mu, bx, by, bz, flight.st, dyn, w, rotation)
+
+
+@njit
+def foot_friction(p, press, mu, bx, by, bz, st, dyn, w, rotation):
+    """The friction impulse of a body at rest that takes the normal impulse ``press`` [N s]
+    from sphere p (unit normal b from the body to p) [OURS, docs/enduring-contact.md,
+    "Backing" and "From bouncing to contact"]: model.md §4.2's impulse against a body at rest
+    (:func:`hsgran.contact.tangential.tangential_impulse`, with m_t = 1/(1/m + R²/I)), on p
+    at its contact point −R b against the point's slip u_t: the impulse that stops the slip,
+    or μ press where that exceeds the cone (μ [-]: the pair's sliding friction). A stopped
+    slip or one reduced along itself only takes energy away. ``w``: p's spin [rad/s],
+    updated."""
+    if press <= 0.0 or mu <= 0.0:
         return
     r = st[p, S_R]
     inv_m, inv_i = dyn.inv_m[p], dyn.inv_i[p]
@@ -429,8 +438,12 @@ def _support_friction(p, press, bx, by, bz, flight, dyn, walls, pair_table, w, r
     ux -= un * bx
     uy -= un * by
     uz -= un * bz
-    w_t = inv_m + (r * r * inv_i if rotation else 0.0)
-    fx, fy, fz = cap(-ux / w_t, -uy / w_t, -uz / w_t, mu * press)
+    slip = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if slip == 0.0:
+        return
+    j_t, _ = tangential_impulse(slip, 1.0 / (inv_m + (r * r * inv_i if rotation else 0.0)), mu,
+                                press)
+    fx, fy, fz = -j_t * ux / slip, -j_t * uy / slip, -j_t * uz / slip
     st[p, 3] += inv_m * fx
     st[p, 4] += inv_m * fy
     st[p, 5] += inv_m * fz
@@ -439,6 +452,26 @@ def _support_friction(p, press, bx, by, bz, flight, dyn, walls, pair_table, w, r
         w[0] += k * (by * fz - bz * fy)
         w[1] += k * (bz * fx - bx * fz)
         w[2] += k * (bx * fy - by * fx)
+
+
+@njit
+def _landing_friction(i, w, vn, flight, dyn, walls, pair_table, flags):
+    """Sphere i lands on wall w with normal velocity ``vn`` [m/s] (its approach, or the rebound
+    given up): a landing is a perfectly plastic impact, in which the wall takes the normal
+    impulse m |v_n| that stops the sphere and gives its Coulomb friction for it
+    (:func:`foot_friction`, μ the pair's sliding friction, model.md §4) [OURS,
+    docs/enduring-contact.md, "From bouncing to contact"]. On a fixed flat wall; a moving
+    plane, a cylinder or a fixed sphere gives none here. Without it, the load that a rattling
+    bed passes to its floor through landings (each at most the landing speed) took no
+    friction: a bed on a 7° slope with μ = 0.08 slid at 0.45–0.52 m/s² where its weight's
+    friction allows 0.36 (corpus 0-69's variant against LAMMPS)."""
+    if not flags[FL_FRICTION] or moving(walls, w) or not flat_fixed(walls, w):
+        return
+    rotation = flags[FL_ROTATION]
+    mu = pair_table[dyn.mat[i], walls.planes_mat[w]][P_MU_S]
+    foot_friction(i, abs(vn) / dyn.inv_m[i], mu, walls.planes_n[w, 0], walls.planes_n[w, 1],
+                  walls.planes_n[w, 2], flight.st, dyn, dyn.omg[i] if rotation else dyn.omg[0],
+                  rotation)
 
 
 @njit
@@ -1000,6 +1033,7 @@ def lands_before_wall(i, w, t, flight, dyn, walls, grid, gravity, pair_table, fs
         return False  # on a, backed by it against w (collide_wall)
     if flight.mstate[i] != MS_FLIGHT:
         leave_plane(i, flight, dyn, gravity, rotation)
+    _landing_friction(i, w, vn, flight, dyn, walls, pair_table, flags)
     enter_plane(i, w, t, np.int64(END_NONE), flight, dyn, walls, gravity, pair_table, fsc,
                 friction, rolling, rotation)
     return True
@@ -1078,6 +1112,7 @@ def collide_wall(i, w, t, flight, dyn, walls, gravity, pair_table, fsc, rec, fla
             leave_plane(i, flight, dyn, gravity, rotation)  # knocked off its plane
         gn, vn = pressed(i, w, t, st, walls, gravity)
         if gn > 0.0 and vn <= fsc[F_LANDING_SPEED] and holds_now(walls, w, t, gravity):
+            _landing_friction(i, w, vn, flight, dyn, walls, pair_table, flags)
             enter_plane(i, w, t, no_end, flight, dyn, walls, gravity, pair_table, fsc, friction,
                         rolling, rotation)
             landed = True
