@@ -14,6 +14,16 @@ def plane(point, normal):
             f"normal = [{', '.join(normal)}]\nmaterial = \"steel\"\n")
 
 
+def friction_header(mu, restitution):
+    """The [scene] (0.1 s under gravity, with rotation and friction), [output] and one
+    steel–steel [[contacts]] table; μ and e as TOML text (numbers or format fields)."""
+    return ("[scene]\nname = \"friction\"\nduration = 0.1\ngravity = [0.0, 0.0, -9.81]\n"
+            "effects = [\"gravity\", \"rotation\", \"friction\"]\n"
+            "[output]\nframe_interval = 0.1\n"
+            f"[[contacts]]\nbetween = [\"steel\", \"steel\"]\nsliding_friction = {mu}\n"
+            f"restitution = {restitution}\n")
+
+
 FLOOR = plane(("0.0", "0.0", "0.0"), ("0.0", "0.0", "1.0"))
 
 

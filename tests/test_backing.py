@@ -13,7 +13,7 @@ from hsgran._settling import _backed_velocity, _dissipative_friction, _support_c
 from hsgran.contact.model import REC_SIZE, resolve
 from hsgran.engine import Simulation
 from hsgran.scene import parse_scene
-from tests.scenes import FLOOR, sphere
+from tests.scenes import FLOOR, friction_header, sphere
 
 R = 0.00168  #: sphere radius [m] (the corpus sphere that gained energy this way)
 RHO = 2700.0  #: density [kg/m³]
@@ -22,19 +22,7 @@ INERTIA = 0.4 * MASS * R * R
 #: Relative kinetic energy a frictionless elastic collision keeps to (rounding) [-]
 ENERGY_RTOL = 1e-12
 
-SCENE = """
-[scene]
-name = "backing"
-duration = 0.1
-gravity = [0.0, 0.0, -9.81]
-effects = ["gravity", "rotation", "friction"]
-[output]
-frame_interval = 0.1
-[[contacts]]
-between = ["steel", "steel"]
-sliding_friction = {mu}
-restitution = 1.0
-"""
+SCENE = friction_header("{mu}", "1.0")
 
 
 def _row(mu):
@@ -100,7 +88,7 @@ def test_without_friction_the_backed_collision_keeps_its_energy():
             assert out[1] == pytest.approx(out[0], rel=ENERGY_RTOL)
 
 
-HEAD_ON = SCENE.replace('restitution = 1.0', 'restitution = 0.5') + FLOOR + sphere(
+HEAD_ON = friction_header("{mu}", "0.5") + FLOOR + sphere(
     ("0.0", "0.0", "0.001")) + sphere(("{x}", "0.0", "{z}"), ("{vx}", "0.0", "{vz}"))
 #: The hit is one impulse and the plate's friction one more, in closed form: rounding, and
 #: gravity's share (it tilts the approach off 45° by ~1e-6, which the spheres' friction at

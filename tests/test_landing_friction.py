@@ -10,7 +10,7 @@ import pytest
 
 from hsgran.engine import Simulation
 from hsgran.scene import parse_scene
-from tests.scenes import FLOOR, num, sphere
+from tests.scenes import FLOOR, friction_header, num, sphere
 
 R = 0.001  #: sphere radius [m]
 G = 9.81  #: gravity [m/s²]
@@ -21,24 +21,10 @@ T_CHECK = 1e-4  #: when the velocity is read, long after the landing (~2e-6 s) [
 #: rounding of the landing time and of the plate's motion [-].
 RTOL = 1e-9
 
-SCENE = """
-[scene]
-name = "landing"
-duration = 0.001
-gravity = [0.0, 0.0, -9.81]
-effects = ["gravity", "rotation", "friction"]
-[output]
-frame_interval = 0.001
-[[contacts]]
-between = ["steel", "steel"]
-sliding_friction = {mu}
-restitution = 0.5
-"""
-
 
 def _landing(mu, vx):
     """(vx at T_CHECK, spin about y at T_CHECK, normal speed at the landing, landing time)."""
-    scene = parse_scene(SCENE.format(mu=mu) + FLOOR
+    scene = parse_scene(friction_header(num(mu), "0.5") + FLOOR
                         + sphere(("0.0", "0.0", num(R + GAP)), (num(vx), "0.0", num(-V_DOWN))))
     sim = Simulation(scene)
     sim.run(until=T_CHECK)
