@@ -1,38 +1,42 @@
 """Touching spheres and walls solved together: the cluster treatment of dense scenes (layer 5;
-compiled kernels used by :mod:`hsgran._loop`, with gravity and ``[enduring_contact] treatment =
-"clusters"``). What it does and what it costs is in docs/enduring-contact.md ("Clusters of
-contacts").
+compiled kernels used by :mod:`hsgran._loop`, with gravity). What it does and what it costs is
+in docs/enduring-contact.md ("Clusters of contacts", "Constrained motion in steps").
 
 A collision under gravity whose spheres touch nothing else, in flight, is the paper's binary
-collision (the caller's). Otherwise the event's spheres and every body touching them are a
-cluster (:func:`gather`), and at the event's instant:
+collision (the caller's). Otherwise the event's spheres and every body touching them, and
+every moving sphere touching those, are a cluster (:func:`gather`), and it moves on in
+**steps** of the Moreau–Jean contact dynamics (Moreau 1988; Jean 1999, "The non-smooth contact
+dynamics method", with θ = 1), each of length h (:func:`_step_of`):
 
-1. **impulses** (Moreau 1988; Jean 1999): all contacts of the cluster at once, each with
-   Newton's restitution (the pair's e_n from the collision model, MODEL §3, for an approach
-   faster than the landing speed; 0 for a slower one: the contact persists) and a Coulomb cone
-   (MODEL §4's μ_s; rolling couples with μ_r, MODEL §5.1), by
-   :func:`hsgran.contact.cluster.solve`. Afterwards no contact of the cluster approaches;
-2. **one step of contact dynamics** over the next segment, of length h (:func:`_segment_time`):
-   the contacts that persist (no longer separating) take the impulses of one Moreau–Jean step
-   under gravity, with the same cones, so that none approaches at the step's end; the
-   velocity change over h gives each body constant accelerations for the segment (the
-   piecewise-constant accelerations of Baraff's event-driven resting contact, found at the
-   velocity level, where the solver converges also where sliding contacts would make the
-   force-level problem diverge);
+1. **one solve per step** (:func:`hsgran.contact.cluster.solve_polished`): every contact of
+   the cluster that touches or could close within the step (gap g ≤ the step's *reach*) at
+   once, for the bodies' velocities at the step's end, v⁺ = v + h g + M⁻¹ Σ P. A contact
+   approaching faster than the landing speed that closes within the step is an impact:
+   Newton's restitution, u⁺ ≥ −e u⁻ (the pair's e_n from the collision model, MODEL §3);
+   every other contact may close its gap by the step's end and no further, u⁺ ≥ −g/h (the
+   gap-aware Signorini condition of the Moreau–Jean scheme: a contact that stays open takes
+   no impulse; one that closes slowly does not rebound). Coulomb's cone with MODEL §4's μ_s;
+   rolling couples within μ_r R* P_n (MODEL §5.1). The solve starts warm from the forces of
+   the last step;
+2. **the motion over the step**: a body moves from its position with constant velocity v⁺
+   (θ = 1). Spheres and planes are convex, so the gap of a contact along straight paths is
+   at least g + h u⁺·... ≥ 0 at every instant of the step: no contact of the step closes
+   within it, and none that the solve held needs an event (:func:`hsgran._predict.
+   held_pair`). Where no body of a connected part of the cluster approaches a partner at the
+   step's start, its bodies move on the parabola from v to v⁺ instead (constant
+   accelerations: the piecewise-constant accelerations of Baraff's event-driven resting
+   contact, Baraff 1994), which keeps every gap open as well and is exact for a motion of
+   constant forces, such as a sphere rolling down a groove;
 3. **motion states**: a sphere slower than the landing speed that its supports hold still at
-   the step's end comes to rest; one whose only persisting contact is a plane takes the
-   paper's motion on a plate (MODEL §5.3), or flies if the plane overhangs it
-   (:func:`hsgran._flight.enter_plane`); one without persisting contacts flies; any other
-   moves with the step's accelerations (``MS_SUPPORTED``) until its segment ends, when its
-   cluster is solved again. A sphere at rest set moving wakes the resting spheres it
-   touches, which are solved again at once.
+   the step's end comes to rest; one that the solve gave no impulse flies from the step's
+   start (its exact parabola); any other moves on in constrained motion (``MS_SUPPORTED``)
+   until its step ends, when its cluster is solved again; a single sphere left touching only
+   a fixed flat wall takes the paper's motion on a plate (MODEL §5.3). A sphere at rest set
+   moving wakes the resting spheres it touches, which are solved again at once.
 
-Over a segment, the normal velocity of a persisting contact moves linearly from its value now
-(≥ 0, up to the solver's tolerance) to its value at the step's end (≥ 0), so the contact never
-closes: the prediction skips
-a touching pair with a supported sphere whose normal velocity stays above −``Space.slack``
-(the solver's tolerance) until the segment ends (:func:`hsgran._predict.held_apart`). No
-zero-time sequence follows a solve.
+Collisions with spheres outside the cluster, and with spheres of the cluster that were not
+within the step's reach of each other at its start, are events as any other: the cluster is
+solved again at that instant, from its state then.
 """
 
 from __future__ import annotations
@@ -41,12 +45,11 @@ import math
 
 import numpy as np
 
-from hsgran._cylinder import concave
+from hsgran._cylinder import across_axis, concave
 from hsgran._flight import (
     TOUCH_REL,
     advance,
     ball,
-    curved,
     enter_plane,
     flat_fixed,
     halt,
@@ -102,16 +105,39 @@ from hsgran.motion import NEVER
 from hsgran.onplane import END_NONE, END_RESOLVE, MS_FLIGHT, MS_REST, MS_SUPPORTED
 from hsgran.wallspec import BL_RADIUS, CY_RADIUS
 
-#: A segment of constant accelerations lasts until a contact between spheres has moved
-#: tangentially by this fraction of σ [-]: the contact normal then turns by 1e-4 rad and the
-#: spheres, which move along the tangent, lift off each other by 5e-9 σ; the cluster is then
-#: solved again from the new normals.
-CURVATURE_REL = 1e-4
-#: Inside a cylinder a sphere moving along the tangent of its contact sinks into the wall,
-#: by d²/2(ρ − r) after a distance d: a segment there lasts until it could have sunk by this
-#: fraction of its radius [-], what the prediction takes as touching (hsgran._flight
-#: PLANE_TOUCHING_REL), and the next solve puts it back on the surface (:func:`gather`).
-CONCAVE_SINK_REL = 1e-10
+#: Longest step of constrained motion [s] (Moreau–Jean, docs/enduring-contact.md "Constrained
+#: motion in steps"). A cluster's step is also cut to STEP_TRAVEL_REL below: this bounds the
+#: steps of slow clusters (a pile, a creeping bed), whose contacts form and break on its scale
+#: (a step of 1e-4 s lets a sphere falling at the landing speed move 1e-7 m), and what a
+#: contact's force may lag behind a change of its partners (one step).
+STEP_MAX = 1e-4
+#: A step lasts at most until two bodies of the cluster, moving apart or together at twice the
+#: fastest body's speed (and the landing speed), could have changed their distance by this
+#: fraction of the cluster's smallest radius [-]: a contact's normal turns by at most ~1e-2 rad
+#: within a step, and an impact within it is taken early by at most that fraction of the
+#: radius (the positions at the step's start, docs/enduring-contact.md).
+STEP_TRAVEL_REL = 1e-2
+#: The step's reach [m], what a contact's gap may be at the step's start for the step's solve
+#: to hold it, is this many times the distance the fastest relative motion of the cluster
+#: (twice the fastest body's speed, and the landing speed) and gravity could close within the
+#: step [-]: a sphere that could meet a body of the cluster within the step joins it, so that
+#: no collision of the step's own bodies falls within it (a faster one is an event as any).
+REACH_SAFETY = 2.0
+#: Sweeps that friction and rolling couples get in a step's solve before they are frozen and
+#: the normal impulses polished alone (hsgran.contact.cluster.solve_polished) [-]. The next
+#: step starts from these forces (its warm start), so friction goes on converging from step
+#: to step where the contacts persist; what a step leaves unconverged is counted
+#: (``I_FROZEN``). On corpus scene 0-17 (188 spheres poured into a wedge, μ = 0.62,
+#: μ_r = 0.02) the bed comes to rest with 100 (every sphere below 1e-9 m/s by 0.32 s), where
+#: 2000 took five times the sweeps.
+STEP_FRICTION_SWEEPS = 100
+#: Inside a cylinder a sphere moving along the tangent of its contact sinks into the wall (by
+#: d²/2(R − r) after a distance d): its contact's target holds the distance from the axis that
+#: the step's straight motion reaches at its end (:func:`_sink`), which depends on the
+#: tangential velocity the solve gives. So the step is solved again with the targets of its
+#: end velocities, up to this many times, while one of them changes by more than the solve's
+#: tolerance [-] (the change is of second order in the step: one round meets it, as a rule).
+CONCAVE_ROUNDS = 4
 #: A sphere whose collisions have not advanced the clock this many times in a row
 #: (``zstreak``) is in a zero-time sequence the pairwise rules (``treatment = "pairwise"``)
 #: have not ended: its next collision is solved as a cluster, and so is every collision of a
@@ -121,50 +147,38 @@ CONCAVE_SINK_REL = 1e-10
 #: (hsgran._flight.MAX_ZERO_TIME_EVENTS). (At 100, before the wedge stop, small pours that
 #: the wedge stop settles in seconds were handed over and ran for minutes.)
 HAND_OVER_STREAK = 2 * WEDGE_EVENTS
-#: In a cluster the pairwise rules hand over, spheres in flight or on a plane join it up to
-#: this many contacts from the event's spheres; those further away are its boundary, moving
-#: as before under gravity or on their plane (as are those beyond the scratch arrays' room).
-#: A boundary sphere that then closes on a body meets it: that collision is solved as a
-#: cluster with it. Spheres in constrained motion always join (their accelerations hang on
-#: the bodies'; tried as a boundary moving with the accelerations of their own last solve,
-#: which made a 14° chute's solves five times cheaper, its bed gained energy: beads were
-#: thrown out at 3 m/s at 0.15 s, not yet traced). One contact: the spheres of a
-#: zero-time sequence and those touching them, not the whole moving bed of a dense flow
-#: (with all, a chute's bed of 355 spheres was solved again and again: 23,000 cluster
-#: events took 317 s).
-HAND_OVER_REACH = 1
-#: Longest segment [s]: even a cluster whose contacts do not slide is solved again this often,
-#: which bounds what the solver's tolerance can add up to (slack × MAX_SEGMENT = 1e-13 m of
-#: overlap with the default landing speed).
-MAX_SEGMENT = 1e-3
-#: Shortest segment, relative to max(1 s, t) [-]: 1e4 times the collapse guard's "one instant"
-#: (hsgran._flight.NO_PROGRESS_REL), so that every solve of a segment's end advances the clock.
+#: Moving spheres join a cluster however many contacts away from the event's spheres they are
+#: (contacts within the step's reach); beyond the scratch arrays' room they are its boundary,
+#: moving on as before. (Before the steps, the pairwise rules' clusters stopped one contact
+#: away, since each of a dense flow's contacts that formed was a solve of its whole bed.)
+ALL_CONTACTS = 1 << 30
+#: Shortest step, relative to max(1 s, t) [-]: 1e4 times the collapse guard's "one instant"
+#: (hsgran._flight.NO_PROGRESS_REL), so that every solve of a step's end advances the clock.
 MIN_SEGMENT_REL = 1e-9
-#: Slack of the prediction for supported spheres, relative to the landing speed [-] (1e-10 m/s
-#: with the default): above what the solver leaves (SOLVE_TOL_REL of it), below anything that
-#: moves a sphere measurably within MAX_SEGMENT (1e-13 m).
+#: Slack of the step's solve, relative to the landing speed [-] (1e-10 m/s with the default):
+#: a contact's normal velocity may end this far below its target, which closes its gap over
+#: a step of STEP_MAX by 1e-14 m (the next step's target takes that back, so overlaps do not
+#: add up); far below anything that moves a sphere measurably. Slower approaches also count
+#: as none (a body is put to rest beside one that closes on it no faster,
+#: :func:`_rest_candidates`; a part of the cluster moves on the parabola where no contact
+#: approaches faster, :func:`_linear_parts`).
 SLACK_V_REL = 1e-7
-#: The solves converge to this fraction of the slack (each contact's velocity, or acceleration,
-#: within it of its target, and no impulse changing by more than that in a sweep) [-]: what
-#: is left over is then below what the prediction forgives.
+#: The solves converge to this fraction of the slack (each contact's velocity within it of its
+#: target, and no impulse changing by more than that in a sweep) [-]: what is left over is
+#: then below the slack (1e-12 m/s with the default landing speed).
 SOLVE_TOL_REL = 0.01
 #: A contact slips when its slip speed exceeds this fraction of the landing speed [-] (below:
 #: static friction); the same for rolling (R* times the rolling angular velocity). 1e-7 m/s
-#: with the default landing speed: slower slips stop within a segment.
+#: with the default landing speed: slower slips stop within a step.
 SLIP_REL = 1e-4
-#: A sphere comes to rest when, besides being slower than the landing speed, its acceleration
-#: and R times its angular acceleration are below this fraction of |g| [-]: far above the
-#: residual of a converged force solve (~1e-12 |g|).
-REST_ACC_REL = 1e-6
 #: An impact (faster than the landing speed) moves the resting spheres up to this many contacts
 #: away from the event's spheres (a row of five, Newton's cradle, in full); resting spheres
 #: further away are immovable. A slower meeting moves none: a pile at rest carries it
-#: (docs/enduring-contact.md). With the cluster treatment moving spheres are always part of
-#: the cluster: held as a boundary moving as before, they could squeeze a body between them
-#: and a wall (see HAND_OVER_REACH for the pairwise rules' clusters).
+#: (docs/enduring-contact.md).
 REST_DEPTH = 4
-#: Target of a contact left out of the force solve (it separates): no force can act.
-NO_CONTACT = -1e300
+#: The step's reach where the contacts within it do not fit the cluster's scratch arrays:
+#: no contact is held, every one is an event (:func:`_stepped`).
+NO_REACH = -1.0
 
 CL_ISOLATED = 0  #: the event's spheres touch nothing else in flight: a binary collision
 CL_SOLVED = 1  #: the cluster was solved
@@ -191,8 +205,10 @@ def _add_body(q, depth, t, flight, dyn, clus, nb, rotation):
 
 
 @njit(inline="always")
-def _add_contact(clus, nc, a, b, q, mat, nx, ny, nz, rb):
-    """Contact nc between body a and body b (−1: immovable, partner q; −1 − w for plane w)."""
+def _add_contact(clus, nc, a, b, q, mat, nx, ny, nz, rb, gap):
+    """Contact nc between body a and body b (−1: immovable, partner q; −1 − w for plane w), at
+    ``gap`` [m]."""
+    clus.ck_gap[nc] = gap
     clus.ck_a[nc] = a
     clus.ck_b[nc] = b
     clus.ck_q[nc] = q
@@ -236,17 +252,18 @@ def _boundary_motion(q, c, nx, ny, nz, t, flight, dyn, clus, rotation):
 # long: one breadth-first walk over the touching bodies; its cell scan, plane scan and the
 # three kinds of partner (a body, a new body, the boundary) share the walk's state
 @njit
-def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotation):
-    """The cluster of sphere s1 (and s2, or −1): every body touching them, and every sphere in
-    constrained motion touching those, and every other moving one up to ``reach`` contacts
-    away, breadth first; in an impact
-    (``fast``: faster than the landing speed) also the resting spheres up to REST_DEPTH
-    contacts away, through which its impulse travels. Other spheres at rest are immovable
-    partners, moving spheres beyond ``reach`` or the room of the scratch arrays the
-    cluster's boundary. Walls are immovable partners
-    moving as they do at t (a moving plane at its velocity then, a turning cylinder's surface
-    with it). Returns (bodies, contacts, whether a moving plane is among the partners,
-    whether a moving sphere is); the bodies are advanced to t."""
+def gather(s1, s2, t, fast, reach, rho, flight, dyn, walls, space, grid, clus, rotation):
+    """The cluster of sphere s1 (and s2, or −1): every body within ``rho`` [m] of them (or
+    touching them: a gap of at most TOUCH_REL of the contact distance), and every sphere in
+    constrained motion within that of those, and every other moving one up to ``reach``
+    contacts away, breadth first; in an impact (``fast``: faster than the landing speed) also
+    the resting spheres up to REST_DEPTH contacts away, through which its impulse travels.
+    Other spheres at rest are immovable partners, moving spheres beyond ``reach`` or the room
+    of the scratch arrays the cluster's boundary. Walls are immovable partners moving as they
+    do at t (a moving plane at its velocity then, a turning cylinder's surface with it). Every
+    pair of bodies, and every body and partner, within ``rho`` is a contact, with its gap.
+    Returns (bodies, contacts, whether a moving plane is among the partners, whether a
+    moving sphere is); the bodies are advanced to t."""
     st, acc, mstate, mat = flight.st, flight.acc, flight.mstate, dyn.mat
     planes_n, planes_mat = walls.planes_n, walls.planes_mat
     box_len, periodic, nxt = space.box_len, space.periodic, grid.nxt
@@ -271,14 +288,15 @@ def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotati
                 set_wall_velocity(walls, w, t)
             else:  # (its row's normal and velocity then those at its contact with s)
                 gap = wall_gap(s, w, st, walls)
-            if gap <= TOUCH_REL * rs and nc < max_c:
+            if gap <= max(rho, TOUCH_REL * rs) and nc < max_c:
                 driven = driven or moving(walls, w)
                 if gap < 0.0 and concave(walls, w):
                     _to_surface(s, w, gap, st, walls)
+                    gap = 0.0
                 nc = _add_contact(clus, nc, p, -1, -1 - w, planes_mat[w], planes_n[w, 0],
                                   planes_n[w, 1], planes_n[w, 2],
                                   walls.planes_geo[w, BL_RADIUS]
-                                  if ball(walls, w) else 0.0)
+                                  if ball(walls, w) else 0.0, gap)
                 for k in range(3):
                     clus.ck_vb[nc - 1, k] = walls.planes_vel[w, k]
         for h in range(cell_heads(s, grid, space)):
@@ -292,7 +310,7 @@ def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotati
                     dz = min_image(st[s, 2] - zq, 2, box_len, periodic)
                     sigma = rs + st[q, S_R]
                     d = math.sqrt(dx * dx + dy * dy + dz * dz)
-                    if d - sigma <= TOUCH_REL * sigma and nc < max_c:
+                    if d - sigma <= max(rho, TOUCH_REL * sigma) and nc < max_c:
                         nx, ny, nz = dx / d, dy / d, dz / d
                         if (lq < 0 and nb < max_b and (
                                 mstate[q] == MS_SUPPORTED
@@ -303,10 +321,10 @@ def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotati
                                            clus, nb, rotation)
                         if lq >= 0:
                             nc = _add_contact(clus, nc, p, lq, q, mat[q], nx, ny, nz,
-                                              st[q, S_R])
+                                              st[q, S_R], d - sigma)
                         else:
                             nc = _add_contact(clus, nc, p, -1, q, mat[q], nx, ny, nz,
-                                              st[q, S_R])
+                                              st[q, S_R], d - sigma)
                             _boundary_motion(q, nc - 1, nx, ny, nz, t, flight, dyn,
                                              clus, rotation)
                             left = left or mstate[q] != MS_REST
@@ -317,8 +335,8 @@ def gather(s1, s2, t, fast, reach, flight, dyn, walls, space, grid, clus, rotati
 
 @njit(inline="always")
 def _to_surface(s, w, gap, st, walls):
-    """Put sphere s, sunk into concave wall w by −gap [m] (at most CONCAVE_SINK_REL of its
-    radius over a segment, and a rounding), back on its surface, along the normal in its
+    """Put sphere s, sunk into concave wall w by −gap [m] (what a step's solve left within its
+    tolerance, :func:`_sink`, or a rounding), back on its surface, along the normal in its
     row."""
     for k in range(3):
         st[s, k] -= gap * walls.planes_n[w, k]
@@ -329,19 +347,6 @@ def release(nb, clus):
     """Forget the cluster's bodies (the sphere-to-body map back to −1)."""
     for b in range(nb):
         clus.cl_loc[clus.cl_body[b]] = -1
-
-
-@njit
-def _kinetic(nb, clus, rotation):
-    """Kinetic energy of the cluster's bodies [J]."""
-    e = 0.0
-    for b in range(nb):
-        v2 = clus.cl_v[b, 0] ** 2 + clus.cl_v[b, 1] ** 2 + clus.cl_v[b, 2] ** 2
-        e += 0.5 * v2 / clus.cl_inv_m[b]
-        if rotation:
-            w2 = clus.cl_w[b, 0] ** 2 + clus.cl_w[b, 1] ** 2 + clus.cl_w[b, 2] ** 2
-            e += 0.5 * w2 / clus.cl_inv_i[b]
-    return e
 
 
 @njit(inline="always")
@@ -396,83 +401,26 @@ def _cold(c, clus):
 
 
 @njit
-def _impact_setup(nc, clus, pair_table, mat, rec, fsc, flags):
-    """Targets, friction and rolling coefficients of the impulse solve (MODEL §3, §4, §5.1):
-    an approach faster than the landing speed rebounds with the pair's e_n, a slower one not
-    at all."""
-    v_land = fsc[F_LANDING_SPEED]
-    for c in range(nc):
-        a = clus.ck_a[c]
-        row = pair_table[mat[clus.cl_body[a]], clus.ck_mat[c]]
-        un = _normal_velocity(c, clus)
-        e = 0.0
-        if un < -v_land:
-            e = _restitution(c, clus, row, rec, flags)
-        clus.ck_tgt[c] = -e * un if un < 0.0 else 0.0
-        clus.ck_mu[c] = row[P_MU_S]
-        clus.ck_mur[c] = row[P_MU_R]
-        r1 = clus.cl_rad[a]
-        r2 = clus.ck_rb[c]
-        clus.ck_reff[c] = r1 * r2 / (r1 + r2) if r2 > 0.0 else r1
-        _cold(c, clus)
-
-
-@njit(inline="always")
-def _room_time(room, v, a):
-    """Time [s] in which a relative motion of speed v [m/s] and acceleration a [m/s²] covers
-    the distance room [m] (v τ + a τ²/2 = room; inf if neither moves)."""
-    if v <= 0.0 and a <= 0.0:
-        return math.inf
-    return 2.0 * room / (v + math.sqrt(v * v + 2.0 * a * room))
-
-
-@njit(inline="always")
-def _room(c, clus, walls):
-    """How far contact c may move along its tangent before its cluster is solved again [m]:
-    CURVATURE_REL × the sum of its radii of curvature (a sphere, a fixed sphere, a corner, an
-    edge, a cylinder from outside), the distance that sinks a sphere by CONCAVE_SINK_REL of
-    its radius inside a cylinder, and no limit on a flat wall (inf)."""
-    r = clus.cl_rad[clus.ck_a[c]]
-    q = clus.ck_q[c]
-    w = -1 - q
-    if clus.ck_b[c] >= 0 or q >= 0 or ball(walls, w):
-        return CURVATURE_REL * (r + clus.ck_rb[c])  # (ck_rb: the partner's radius)
-    if not curved(walls, w):
-        return math.inf
-    rho = walls.planes_cyl[w, CY_RADIUS]
-    if concave(walls, w):
-        return math.sqrt(2.0 * max(rho - r, 0.0) * CONCAVE_SINK_REL * r)
-    return CURVATURE_REL * (r + rho)
-
-
-@njit
-def _segment_time(nc, clus, h, solved, t, walls):
-    """Length of a segment of constant accelerations [s]: until a contact could have moved
-    along its tangent by its :func:`_room` (between spheres CURVATURE_REL σ: the normal then
-    turns by 1e-4 rad, and the spheres, which move along the tangent, lift off each other by
-    5e-9 σ), at most
-    ``h`` (MAX_SEGMENT for the step), at least MIN_SEGMENT_REL × max(1 s, t). Before the
-    step's solve (``solved`` False) from the relative velocities only: the step's length h;
-    after it, with the relative accelerations the solve gave too: the segment's length, at
-    most h (the accelerations keep every persisting contact from closing over the whole
-    step, so over any part of it too)."""
-    tau = h
-    for c in range(nc):
-        if clus.ck_tgt[c] == NO_CONTACT:
-            continue  # separating
-        room = _room(c, clus, walls)
-        if room == math.inf:
-            continue  # flat
-        a = clus.ck_a[c]
-        b = clus.ck_b[c]
-        v2 = a2 = 0.0
-        for k in range(3):
-            v2 += (clus.cl_v[a, k] - (clus.cl_v[b, k] if b >= 0 else clus.ck_vb[c, k])) ** 2
-            if solved:  # a boundary's ck_ab holds its velocity at the step's end
-                a2 += (clus.cl_a[a, k] - (clus.cl_a[b, k] if b >= 0 else
-                                          (clus.ck_ab[c, k] - clus.ck_vb[c, k]) / h)) ** 2
-        tau = min(tau, _room_time(room, math.sqrt(v2), math.sqrt(a2)))
-    return max(tau, MIN_SEGMENT_REL * max(1.0, t))
+def _step_of(nb, nc, t, clus, gravity, v_land):
+    """Length h [s] and reach [m] of the step of a cluster gathered with its touching contacts (nb
+    bodies, nc contacts): h is STEP_MAX, or shorter where two bodies could change their distance by
+    STEP_TRAVEL_REL of the smallest radius within it at twice the fastest body's speed (and the
+    landing speed ``v_land`` [m/s]); at least MIN_SEGMENT_REL × max(1 s, t). The reach is
+    REACH_SAFETY times what such a relative motion and gravity close within h."""
+    vmax = 0.0
+    rmin = math.inf
+    for b in range(nb):
+        vmax = max(vmax, math.sqrt(clus.cl_v[b, 0] ** 2 + clus.cl_v[b, 1] ** 2
+                                   + clus.cl_v[b, 2] ** 2))
+        rmin = min(rmin, clus.cl_rad[b])
+    for c in range(nc):  # a moving boundary
+        if clus.ck_b[c] < 0:
+            vmax = max(vmax, math.sqrt(clus.ck_vb[c, 0] ** 2 + clus.ck_vb[c, 1] ** 2
+                                       + clus.ck_vb[c, 2] ** 2))
+    v_rel = 2.0 * vmax + v_land
+    h = max(min(STEP_MAX, STEP_TRAVEL_REL * rmin / v_rel), MIN_SEGMENT_REL * max(1.0, t))
+    g = math.sqrt(gravity[0] ** 2 + gravity[1] ** 2 + gravity[2] ** 2)
+    return h, REACH_SAFETY * (v_rel * h + g * h * h)
 
 
 @njit(inline="always")
@@ -539,7 +487,7 @@ def _warm_store(nb, nc, h, clus):
         for k in range(WARM_SLOTS):
             clus.wm_q[clus.cl_body[b], k] = WARM_EMPTY
     for c in range(nc):
-        if clus.ck_tgt[c] == NO_CONTACT or clus.ck_pn[c] == 0.0:
+        if clus.ck_pn[c] == 0.0:
             continue
         owner, partner, sign = _warm_key(c, clus)
         k = _warm_slot(clus, owner, partner, True)
@@ -552,54 +500,127 @@ def _warm_store(nb, nc, h, clus):
             clus.wm_f[owner, k, 3 + j] = s * clus.ck_hr[c, j]
 
 
+@njit(inline="always")
+def _target(gap, reb, h, slack):
+    """Target [m/s] of a contact's normal velocity at the step's end (:func:`_setup`): the
+    rebound ``reb`` of an impact (NaN: none), never closing the gap ``gap`` [m] within the step
+    h [s]; an overlap within ``slack`` × h stays as it is (0); any other gap may close, −gap/h."""
+    if not math.isnan(reb):
+        return max(reb, -gap / h)
+    if gap < 0.0 and gap >= -slack * h:
+        return 0.0
+    return -gap / h
+
+
+@njit(inline="always")
+def _sink(c, h, v, clus, walls):
+    """How far [m] the body of contact c sinks into a concave wall (the inside of a cylinder) by
+    moving straight at its velocity ``v[ck_a[c]]`` [m/s] for h [s], beyond what its normal
+    velocity does: with ρ = R − r the largest distance of its centre from the axis, a body at
+    distance d₀ = ρ − g that moves by h u_n towards the axis and by h v_p across the axis and
+    the normal ends at distance √((d₀ − h u_n)² + h² v_p²), within ρ where u_n ≥ (s − g)/h,
+    s = ρ − √(ρ² − h² v_p²) (exact for the straight motion; its distance from the axis is
+    convex in time, so the gap is least at the step's start or end). 0 for any other contact."""
+    q = clus.ck_q[c]
+    if q >= 0 or not concave(walls, -1 - q):
+        return 0.0
+    w = -1 - q
+    a = clus.ck_a[c]
+    un = v[a, 0] * clus.ck_n[c, 0] + v[a, 1] * clus.ck_n[c, 1] + v[a, 2] * clus.ck_n[c, 2]
+    px, py, pz = across_axis(v[a, 0] - un * clus.ck_n[c, 0], v[a, 1] - un * clus.ck_n[c, 1],
+                             v[a, 2] - un * clus.ck_n[c, 2], walls, w)
+    s2 = h * h * (px * px + py * py + pz * pz)
+    rho = max(walls.planes_cyl[w, CY_RADIUS] - clus.cl_rad[a], 0.0)
+    root = math.sqrt(max(rho * rho - s2, 0.0))
+    return s2 / (rho + root) if rho + root > 0.0 else 0.0
+
+
 @njit
-def _step_setup(nb, nc, h, clus, gravity, v_persist, rotation, friction, rolling):
-    """The step problem of the contacts that persist (Moreau–Jean over one segment of length h
-    [s]): each body's velocity at the segment's end without contacts (v + h g, in ``cl_a``;
-    spin in ``cl_al``); a persisting contact (separating after the impulses slower than
-    ``v_persist`` [m/s], the landing speed: gravity would bring it back at once) must not
-    approach at the end (target 0; its normal velocity then stays ≥ 0 over the segment, so
-    it never closes) and starts from its force in the last solve (warm); a contact
-    separating faster takes nothing. Returns the number of persisting contacts."""
-    persist = 0
+def _concave_retarget(nc, h, slack, clus, walls):
+    """The targets of the contacts with concave walls at the velocities the step's solve gave
+    (:func:`_sink`); returns the largest change of a target [m/s]."""
+    change = 0.0
+    for c in range(nc):
+        q = clus.ck_q[c]
+        if q < 0 and concave(walls, -1 - q):
+            gap = clus.ck_gap[c] - _sink(c, h, clus.cl_a, clus, walls)
+            tgt = _target(gap, clus.ck_reb[c], h, slack)
+            change = max(change, abs(tgt - clus.ck_tgt[c]))
+            clus.ck_tgt[c] = tgt
+    return change
+
+
+@njit
+def _setup(nb, nc, h, slack, clus, walls, pair_table, mat, rec, gravity, v_land, flags):
+    """The step's problem (Moreau–Jean, θ = 1, over h [s]): each body's velocity at the step's end
+    without contacts, v + h g (into ``cl_a``; spin into ``cl_al``); each contact's target for its
+    normal velocity at the step's end (``ck_tgt``): an approach faster than the landing speed
+    ``v_land`` [m/s] that closes within the step rebounds with the pair's e_n (MODEL §3, as a binary
+    collision), −e u, and then flies freely for the step (plus h times the relative acceleration of
+    gravity along the normal, which against an immovable partner brings it back; at least −g/h: a
+    rebound that gravity takes back within the step is no rebound at that step's resolution); every
+    other contact may close its gap g by the step's end, −g/h, and one that overlaps by more than
+    the solve's slack (``slack`` [m/s] over h: what a solve may leave) opens by as much (an overlap
+    within it stays as it is: asking a body squeezed between two partners to leave both would ask
+    what may not be possible), :func:`_target`; inside a cylinder g less what the step's straight
+    motion at these velocities sinks into it (:func:`_sink`, solved again at the velocities the
+    solve gives: :func:`_concave_rounds`); its friction (MODEL §4) and rolling coefficients (MODEL
+    §5.1); and each contact starts from its force in the last solve, if kept (warm), applied to the
+    bodies."""
+    rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
     for b in range(nb):
         for k in range(3):
             clus.cl_a[b, k] = clus.cl_v[b, k] + h * gravity[k]
             clus.cl_al[b, k] = clus.cl_w[b, k] if rotation else 0.0
     for c in range(nc):
+        a = clus.ck_a[c]
+        row = pair_table[mat[clus.cl_body[a]], clus.ck_mat[c]]
         un = _normal_velocity(c, clus)
+        gap = clus.ck_gap[c] - _sink(c, h, clus.cl_a, clus, walls)
+        clus.ck_reb[c] = math.nan
+        if un < -v_land and gap + h * un < 0.0:
+            # the rebound, then free flight for the rest of the step (the gravity a body
+            # against an immovable partner would otherwise not feel in the step of its
+            # bounce, which kept a bead bouncing in a pocket for ever); never closing further
+            an = 0.0
+            for k in range(3):
+                ab = gravity[k] if clus.ck_b[c] >= 0 else clus.ck_ab[c, k]
+                an += (gravity[k] - ab) * clus.ck_n[c, k]
+            clus.ck_reb[c] = -_restitution(c, clus, row, rec, flags) * un + h * an
+        clus.ck_tgt[c] = _target(gap, clus.ck_reb[c], h, slack)
+        clus.ck_mu[c] = row[P_MU_S]
+        clus.ck_mur[c] = row[P_MU_R]
+        r1 = clus.cl_rad[a]
+        r2 = clus.ck_rb[c]
+        clus.ck_reff[c] = r1 * r2 / (r1 + r2) if r2 > 0.0 else r1
         _cold(c, clus)
         for k in range(3):
-            # an immovable partner's velocity at the segment's end
+            # an immovable partner's velocity over the step: at its end
             clus.ck_ab[c, k] = clus.ck_vb[c, k] + h * clus.ck_ab[c, k]
-        if un > v_persist:
-            clus.ck_tgt[c] = NO_CONTACT
-        else:
-            persist += 1
-            clus.ck_tgt[c] = 0.0
-            _warm_load(c, h, clus, friction, rolling and rotation)
+        _warm_load(c, h, clus, friction, rolling and rotation)
     start(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, clus.cl_inv_m, clus.cl_inv_i,
           clus.cl_rad, clus.cl_a, clus.cl_al, clus.ck_pn, clus.ck_pt, clus.ck_hr, rotation)
-    return persist
 
 
 @njit
-def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol, grow):
+def _solve_cluster(nc, clus, v, w, vb, rotation, friction, rolling, tol):
     """:func:`hsgran.contact.cluster.solve_polished` on the cluster's contacts, with the
-    bodies' velocities (or the step's end velocities) ``v``, ``w`` and the immovable partners'
-    ``vb``; with ``grow``, a solve that stalls stops short; returns (sweeps, worst,
+    bodies' velocities at the step's end ``v``, ``w`` and the immovable partners' ``vb``,
+    friction given STEP_FRICTION_SWEEPS sweeps, every part of it stopping where it stalls
+    (a problem with no solution, which Gauss–Seidel shows by not converging: a body held
+    between immovable partners that the targets ask it to leave); returns (sweeps, worst,
     stalled, frozen)."""
     return solve_polished(nc, clus.ck_a, clus.ck_b, clus.ck_n, clus.ck_rb, vb, clus.ck_tgt,
                           clus.ck_mu, clus.ck_slip, clus.ck_mur, clus.ck_reff, clus.ck_rslip,
                           clus.cl_inv_m, clus.cl_inv_i, clus.cl_rad, v, w, clus.ck_pn,
                           clus.ck_pt, clus.ck_hr, rotation, friction, rolling, tol,
-                          grow=grow)
+                          STEP_FRICTION_SWEEPS, False, True)
 
 
 @njit(inline="always")
 def _count(isc, sweeps, nc, step, frozen):
-    """Book a solve's work: its sweeps (a step's force solve: also I_STEP_SWEEPS), the
-    contacts they visited, and whether its friction was frozen unconverged (I_FROZEN)."""
+    """Book a solve's work: its sweeps (a step's solve: also I_STEP_SWEEPS), the contacts they
+    visited, and whether its friction was frozen unconverged (I_FROZEN)."""
     isc[I_SWEEPS] += sweeps
     if step:
         isc[I_STEP_SWEEPS] += sweeps
@@ -608,14 +629,17 @@ def _count(isc, sweeps, nc, step, frozen):
         isc[I_FROZEN] += 1
 
 
+#: What :func:`_solve_step` ended with.
+STEP_SOLVED = 0  #: every contact met, friction as far as its sweeps reached
+STEP_PLASTIC = 1  #: met without rebounds (every target at most 0; counted)
+STEP_FRICTIONLESS = 2  #: met without rebounds, friction and rolling couples (counted)
+STEP_SHORT = 3  #: not even that met every contact to the slack (counted)
+
+
 @njit
-def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
-    """The step's solve with friction did not converge (Gauss–Seidel with Coulomb cones need
-    not): solve it again without friction and rolling couples, a convex problem on which
-    Gauss–Seidel converges; if that too stops short, the bodies keep their velocities over
-    the segment (no acceleration: gravity is left out for at most one segment). Either way no
-    contact closes within the segment, which a contact left approaching would (a zero-time
-    sequence). Counted in ``isc[I_UNSOLVED]``."""
+def _restart(nb, h, clus, nc, space, rotation):
+    """Start the step's solve again from no impulse (the bodies at their velocities without
+    contacts, those held at rest at none), every target at most 0: no rebound."""
     for b in range(nb):
         held = clus.cl_depth[b] < 0  # held at rest (_hold_rests)
         for k in range(3):
@@ -623,52 +647,120 @@ def _unsolved_step(nb, nc, h, clus, isc, space, rotation):
             clus.cl_al[b, k] = clus.cl_w[b, k] if rotation and not held else 0.0
     for c in range(nc):
         _cold(c, clus)
-    sweeps, worst, _, _ = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
-                                         False, False, SOLVE_TOL_REL * space.slack[0], False)
-    _count(isc, sweeps, nc, True, False)
-    if worst > space.slack[0]:
-        for b in range(nb):
-            if clus.cl_depth[b] >= 0:
-                for k in range(3):
-                    clus.cl_a[b, k] = clus.cl_v[b, k]
-                    clus.cl_al[b, k] = clus.cl_w[b, k]
+        clus.ck_tgt[c] = min(clus.ck_tgt[c], 0.0)
 
 
 @njit
-def _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling, grow):
-    """The step's force solve, on from the impulses it has; if it stops short of the slack,
-    the fallback :func:`_unsolved_step` (counted in ``isc[I_UNSOLVED]``). Returns whether it
-    was solved; with ``grow``, False at once where the solve stalls (the caller solves a
-    larger cluster)."""
-    sweeps, worst, stalled, frozen = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab,
-                                                    rotation, friction, rolling,
-                                                    SOLVE_TOL_REL * space.slack[0], grow)
+def _solve_step(nb, nc, h, clus, isc, space, flags):
+    """The step's solve, on from the impulses it has (:func:`_setup`). Where it stops short of
+    the slack (Gauss–Seidel with Coulomb cones need not converge, and a problem may have no
+    solution: an impact's rebound off a body held between immovable partners), it is solved
+    again from no impulse without rebounds (every target at most 0, which bodies that stop
+    meet), and if that too stops short, also without friction and rolling couples: a convex
+    problem (both counted in ``isc[I_UNSOLVED]``); if even that stops short, its impulses are
+    kept as they are (a contact then closes by at most what they leave over the step, which
+    the next step's target takes back). Returns a STEP_* code. (A solve whose friction stalls
+    has it frozen, as where its sweeps run out: hsgran.contact.cluster.solve_polished.)"""
+    rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
+    tol = SOLVE_TOL_REL * space.slack[0]
+    sweeps, worst, _, frozen = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab,
+                                              rotation, friction, rolling, tol)
     _count(isc, sweeps, nc, True, frozen)
-    if stalled:
-        return False
-    if worst > space.slack[0]:
-        isc[I_UNSOLVED] += 1
-        _unsolved_step(nb, nc, h, clus, isc, space, rotation)
-        return False
-    return True
+    if worst <= space.slack[0]:
+        return STEP_SOLVED
+    isc[I_UNSOLVED] += 1
+    _restart(nb, h, clus, nc, space, rotation)
+    if friction or rolling:
+        sweeps, worst, _, frozen = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab,
+                                                  rotation, friction, rolling, tol)
+        _count(isc, sweeps, nc, True, frozen)
+        if worst <= space.slack[0]:
+            return STEP_PLASTIC
+        _restart(nb, h, clus, nc, space, rotation)
+    sweeps, worst, _, _ = _solve_cluster(nc, clus, clus.cl_a, clus.cl_al, clus.ck_ab, rotation,
+                                         False, False, tol)
+    _count(isc, sweeps, nc, True, False)
+    return STEP_FRICTIONLESS if worst <= space.slack[0] else STEP_SHORT
 
 
 @njit
-def _accelerations(nb, h, clus):
-    """Turn the step's end velocities (``cl_a``, ``cl_al``) into the segment's constant
-    accelerations [m/s², rad/s²]."""
+def _concave_rounds(nb, nc, h, clus, isc, walls, space, flags):
+    """:func:`_solve_step`, and where it is met and the cluster touches the inside of a cylinder,
+    again with the targets of the velocities it gave (:func:`_sink`) while one changes by more
+    than the solve's tolerance, at most CONCAVE_ROUNDS times. Returns a STEP_* code."""
+    status = _solve_step(nb, nc, h, clus, isc, space, flags)
+    tol = SOLVE_TOL_REL * space.slack[0]
+    for _ in range(CONCAVE_ROUNDS):
+        if status != STEP_SOLVED or _concave_retarget(nc, h, space.slack[0], clus, walls) <= tol:
+            break
+        status = _solve_step(nb, nc, h, clus, isc, space, flags)
+    return status
+
+
+@njit(inline="always")
+def _root(b, clus):
+    """The representative of body b's part (union-find with path halving on ``cl_root``)."""
+    root = clus.cl_root
+    while root[b] != b:
+        root[b] = root[root[b]]
+        b = root[b]
+    return b
+
+
+@njit
+def _linear_parts(nb, nc, clus, walls, slack):
+    """Which bodies move with constant velocity over the step (θ = 1) rather than on the parabola
+    from their velocity now to the step's end: every body of a part of the cluster (bodies joined by
+    its contacts) in which some contact approaches at the step's start (normal velocity below
+    −``slack`` [m/s] before the solve: a gap closing no faster closes on the parabola by less than
+    slack × h, 1e-14 m over a step of STEP_MAX with the default landing speed). Along straight paths
+    a gap changes at least as the normal velocity at the step's end says, which the solve keeps from
+    closing it; on the parabola it changes by the mean of that and the normal velocity now, which
+    keeps it open as well only where the latter is not negative. A part touching the inside of a
+    cylinder (``walls``) moves straight too: its targets hold the straight motion (:func:`_sink`),
+    whose gap with the concave wall is least at the step's start or end. In ``cl_root``: a body of a
+    linear part gets a negative entry (:func:`_linear`)."""
+    root = clus.cl_root
     for b in range(nb):
-        for k in range(3):
-            clus.cl_a[b, k] = (clus.cl_a[b, k] - clus.cl_v[b, k]) / h
-            clus.cl_al[b, k] = (clus.cl_al[b, k] - clus.cl_w[b, k]) / h
+        root[b] = b
+    for c in range(nc):
+        bb = clus.ck_b[c]
+        if bb >= 0:
+            ra = _root(clus.ck_a[c], clus)
+            rb = _root(bb, clus)
+            if ra != rb:
+                root[max(ra, rb)] = min(ra, rb)
+    for b in range(nb):
+        root[b] = _root(b, clus)
+    # mark the representative of every part with an approaching contact, or a contact inside
+    # a cylinder (whose target holds the straight motion, :func:`_sink`): −1 − itself
+    for c in range(nc):
+        r = root[clus.ck_a[c]]
+        q = clus.ck_q[c]
+        if r >= 0 and root[r] >= 0 and (_normal_velocity(c, clus) < -slack
+                                        or (q < 0 and concave(walls, -1 - q))):
+            root[r] = -1 - r
+    for b in range(nb):
+        r = root[b]
+        if r >= 0 and root[r] < 0:
+            root[b] = root[r]
+
+
+@njit(inline="always")
+def _linear(b, clus):
+    """Whether body b moves with constant velocity over the step (:func:`_linear_parts`)."""
+    return clus.cl_root[b] < 0
 
 
 @njit
 def _rest_candidates(nb, nc, clus, fsc, gravity):
-    """Mark in ``cl_depth`` (−1) the bodies that come to rest: slower than the landing speed
-    now (what is given up), at a standstill at the step's end (its velocities in ``cl_a``,
-    ``cl_al``: below SLIP_REL × the landing speed, R × spin included: their supports hold
-    them), and not resting on a body that goes on moving (a persisting contact below them)."""
+    """Mark in ``cl_depth`` (−1) the bodies that come to rest: at a standstill both now and at
+    the step's end (velocities in ``cl_v``, ``cl_w`` and ``cl_a``, ``cl_al``: below SLIP_REL
+    × the landing speed, R × spin included), so that their supports held them still over a
+    whole step from rest, and not resting on a body that goes on moving (a contact below them
+    that carries or touches). (At the step's end alone is not enough: a sphere rocking in a
+    hollow, whose speed passes through zero within a step, can end the step at a standstill,
+    the more easily the closer its speed was to what gravity takes from it in a step.)"""
     v_land = fsc[F_LANDING_SPEED]
     v_still = SLIP_REL * v_land
     for b in range(nb):
@@ -679,8 +771,8 @@ def _rest_candidates(nb, nc, clus, fsc, gravity):
         for k in range(3):
             e2 += clus.cl_a[b, k] ** 2
             e3 += clus.cl_al[b, k] ** 2 * r * r
-        if v2 <= v_land * v_land and w2 <= v_land * v_land and e2 <= v_still * v_still \
-                and e3 <= v_still * v_still:
+        still = v_still * v_still
+        if v2 <= still and w2 <= still and e2 <= still and e3 <= still:
             clus.cl_depth[b] = -1
     # a body rests only on supports that rest too: a persisting contact from below (its normal
     # towards the body points up) with a body that moves, or a moving boundary, keeps it going;
@@ -691,8 +783,8 @@ def _rest_candidates(nb, nc, clus, fsc, gravity):
     while changed:
         changed = False
         for c in range(nc):
-            if clus.ck_tgt[c] == NO_CONTACT:
-                continue
+            if clus.ck_pn[c] == 0.0 and clus.ck_gap[c] > TOUCH_REL * clus.cl_rad[clus.ck_a[c]]:
+                continue  # neither carries nor touches
             a = clus.ck_a[c]
             b = clus.ck_b[c]
             up = -(clus.ck_n[c, 0] * gravity[0] + clus.ck_n[c, 1] * gravity[1]
@@ -725,8 +817,9 @@ def _pressed(c, m, clus, slack):
 
 @njit
 def _hold_rests(nb, nc, clus):
-    """If a body that comes to rest (:func:`_rest_candidates`) shares a persisting contact with
-    one that goes on moving, the moving one was solved as if its partner went on with the
+    """If a body that comes to rest (:func:`_rest_candidates`) shares a contact of the step
+    with one that goes on moving (one that carries or one within the reach: the prediction
+    then holds that pair apart), the moving one was solved as if its partner went on with the
     partner's (slight) motion: hold every resting body still (immovable, at rest at the step's
     end) so that the step can be solved again, from the forces it has; returns whether it
     must be. (Halted after the solve instead, a resting body would leave the moving one
@@ -734,8 +827,7 @@ def _hold_rests(nb, nc, clus):
     mixed = False
     for c in range(nc):
         b = clus.ck_b[c]
-        if clus.ck_tgt[c] != NO_CONTACT and b >= 0 and \
-                (clus.cl_depth[clus.ck_a[c]] < 0) != (clus.cl_depth[b] < 0):
+        if b >= 0 and (clus.cl_depth[clus.ck_a[c]] < 0) != (clus.cl_depth[b] < 0):
             mixed = True
             break
     if mixed:
@@ -751,15 +843,15 @@ def _hold_rests(nb, nc, clus):
 
 @njit
 def _support(b, nc, clus):
-    """The persisting contact of body b with the largest force: its plane w (as w) or sphere q
-    (as −2 − q), for the motion state's ``mplane``; and how many persisting contacts b has and
-    the plane of the last one (−1 if it is not a plane)."""
+    """The contact of body b with the largest impulse in the step: its plane w (as w) or
+    sphere q (as −2 − q), for the motion state's ``mplane``; and how many of its contacts
+    carry an impulse, and the plane of the last one (−1 if it is not a plane)."""
     best = -1.0
     code = -1
     count = 0
     plane = -1
     for c in range(nc):
-        if clus.ck_tgt[c] == NO_CONTACT:
+        if clus.ck_pn[c] == 0.0:
             continue
         a = clus.ck_a[c]
         bb = clus.ck_b[c]
@@ -811,31 +903,88 @@ def _wake(s, t, flight, walls, space, grid, sched, clus, isc, supported=False, r
         reschedule_fn(np.int64(grid.stack[k]), t, flight, walls, space, grid, sched, isc, True)
 
 
-# long: the motion state of each body after a solve (rest, flight, the paper's plate, or
-# supported) writes the same dozen arrays in four ways; split, each would take them all
+@njit(inline="always")
+def _lowest_gap(g0, rel_v, rel_a, h):
+    """The least of g0 + rel_v τ + rel_a τ²/2 over 0 ≤ τ ≤ h [m]."""
+    low = min(g0, g0 + rel_v * h + 0.5 * rel_a * h * h)
+    if rel_a > 0.0 and 0.0 < -rel_v / rel_a < h:
+        low = min(low, g0 - 0.5 * rel_v * rel_v / rel_a)
+    return low
+
+
 @njit
-def _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, isc,
-                  pair_table, fsc, flags):
-    """Write the solve's velocities and motion states back to the spheres, re-predict them and
-    wake what they carried; returns the kinetic energy given up by the spheres put to rest
-    [J]."""
-    rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
+def _flies_clear(b, nc, h, clus, gravity, slack):
+    """Whether body b, which the step's solve gave no impulse, can fly on its exact parabola
+    from now without closing a contact of the step within it [bool]. The solve kept its
+    contacts open for the step's motion of it (:func:`_linear_parts`), not for its flight: a
+    sphere moving slowly up into one above it, which gravity turns back within the step,
+    needs no impulse by the step's end, but in flight it meets that sphere at once (a
+    zero-time sequence). For each contact, the gap along the normal now, with the relative
+    motion of its flight against the partner's motion in the step (at rest, or on its line or
+    parabola; a partner with no impulse either may fly too, or move on its line), must stay
+    above −``slack`` × h over the step."""
+    for c in range(nc):
+        a = clus.ck_a[c]
+        p = clus.ck_b[c]
+        if a != b and p != b:
+            continue
+        sign = 1.0 if a == b else -1.0  # the normal, from the partner to b
+        o = p if a == b else a
+        rel_v = rel_a = 0.0  # against the partner's motion in the step
+        fly_v = 0.0  # against its flight, if it may fly (the same acceleration)
+        may_fly = o >= 0 and clus.cl_depth[o] >= 0 and _unloaded(o, nc, clus)
+        for k in range(3):
+            n = sign * clus.ck_n[c, k]
+            if o < 0:  # immovable: a wall, a sphere at rest, or the boundary
+                vo = clus.ck_vb[c, k]
+                ao = (clus.ck_ab[c, k] - clus.ck_vb[c, k]) / h
+            elif clus.cl_depth[o] < 0:  # comes to rest
+                vo = ao = 0.0
+            elif _linear(o, clus):
+                vo = clus.cl_a[o, k]
+                ao = 0.0
+            else:
+                vo = clus.cl_v[o, k]
+                ao = (clus.cl_a[o, k] - clus.cl_v[o, k]) / h
+            rel_v += (clus.cl_v[b, k] - vo) * n
+            rel_a += (gravity[k] - ao) * n
+            if may_fly:
+                fly_v += (clus.cl_v[b, k] - clus.cl_v[o, k]) * n
+        low = _lowest_gap(clus.ck_gap[c], rel_v, rel_a, h)
+        if may_fly:
+            low = min(low, _lowest_gap(clus.ck_gap[c], fly_v, 0.0, h))
+        if low < -slack * h:
+            return False
+    return True
+
+
+@njit(inline="always")
+def _unloaded(b, nc, clus):
+    """Whether no contact of body b carries an impulse in the step."""
+    for c in range(nc):
+        if (clus.ck_a[c] == b or clus.ck_b[c] == b) and clus.ck_pn[c] != 0.0:
+            return False
+    return True
+
+
+# long: the motion state of each body after a solve (rest, flight, or supported on a line
+# or a parabola) writes the same dozen arrays in three ways; split, each would take them all
+@njit
+def _apply_states(nb, nc, t, h, reach, flight, dyn, walls, space, grid, sched, clus, isc,
+                  flags):
+    """Write the step's motion and motion states back to the spheres (the bodies' velocities
+    now in ``cl_v``, ``cl_w``, at the step's end in ``cl_a``, ``cl_al``), re-predict them and
+    wake what they carried. A sphere in constrained motion holds, until its step ends at
+    t + h, every contact within ``reach`` [m] of its position now (``seg_reach``)."""
+    rotation = flags[FL_ROTATION]
     st, acc, mstate, mplane = flight.st, flight.acc, flight.mstate, flight.mplane
     omg, alpha = dyn.omg, dyn.alpha
     gravity = space.gravity
-    given_up = 0.0
+    _linear_parts(nb, nc, clus, walls, space.slack[0])
     for b in range(nb):
         s = clus.cl_body[b]
-        for k in range(3):
-            st[s, 3 + k] = clus.cl_v[b, k]
-            if rotation:
-                omg[s, k] = clus.cl_w[b, k]
-        code, count, plane = _support(b, nc, clus)
+        code, count, _ = _support(b, nc, clus)
         if clus.cl_depth[b] < 0:  # at rest on its supports (_rest_candidates)
-            given_up += 0.5 * (st[s, 3] ** 2 + st[s, 4] ** 2 + st[s, 5] ** 2) / dyn.inv_m[s]
-            if rotation:
-                given_up += 0.5 * (omg[s, 0] ** 2 + omg[s, 1] ** 2 + omg[s, 2] ** 2) \
-                    / dyn.inv_i[s]
             halt(s, st, omg, rotation)
             for k in range(3):
                 acc[s, k] = 0.0
@@ -845,23 +994,31 @@ def _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, 
             mplane[s] = code
             flight.seg_end[s] = NEVER
             flight.seg_code[s] = END_NONE
-        elif count == 1 and plane >= 0 and flat_fixed(walls, plane):
-            # on one plane (or face) only: the paper's plate (MODEL §5.3)
-            leave_plane(s, flight, dyn, gravity, rotation)
-            enter_plane(s, np.int64(plane), t, np.int64(END_NONE), flight, dyn, walls, gravity,
-                        pair_table, fsc, friction, rolling, rotation)
-        elif count == 0:
+        elif count == 0 and _flies_clear(b, nc, h, clus, gravity, space.slack[0]):
+            # no impulse in the step: it flies, exactly, from now
+            for k in range(3):
+                st[s, 3 + k] = clus.cl_v[b, k]
+                if rotation:
+                    omg[s, k] = clus.cl_w[b, k]
             leave_plane(s, flight, dyn, gravity, rotation)
             mplane[s] = -1
         else:
+            linear = _linear(b, clus)
+            for k in range(3):
+                if linear:
+                    st[s, 3 + k] = clus.cl_a[b, k]
+                    acc[s, k] = 0.0
+                else:
+                    st[s, 3 + k] = clus.cl_v[b, k]
+                    acc[s, k] = (clus.cl_a[b, k] - clus.cl_v[b, k]) / h
+                if rotation:
+                    omg[s, k] = clus.cl_al[b, k] if linear else clus.cl_w[b, k]
+                    alpha[s, k] = 0.0 if linear else (clus.cl_al[b, k] - clus.cl_w[b, k]) / h
             mstate[s] = MS_SUPPORTED
             mplane[s] = -1
-            for k in range(3):
-                acc[s, k] = clus.cl_a[b, k]
-                if rotation:
-                    alpha[s, k] = clus.cl_al[b, k]
-            flight.seg_end[s] = t + tau
+            flight.seg_end[s] = t + h
             flight.seg_code[s] = END_RESOLVE
+            flight.seg_reach[s] = reach
         flight.counter[s] += 1
     for b in range(nb):
         reschedule_fn(clus.cl_body[b], t, flight, walls, space, grid, sched, isc, True)
@@ -869,26 +1026,54 @@ def _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, 
         s = clus.cl_body[b]
         if clus.cl_was[b] == MS_REST and mstate[s] != MS_REST:
             _wake(s, t, flight, walls, space, grid, sched, clus, isc)
-    return given_up
 
 
 @njit
-def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
-           rec, flags, final):
-    """Impulses, forces and motion states of a gathered cluster (see the module); the impulse
-    of contact ``seed`` (or −1) goes to ``rec`` for the event log. Returns the energy the
-    cluster took [J] (the impulses' loss and what the spheres put to rest gave up); unless
-    ``final``, NaN, with nothing written back, where the impulses or the step stop short of
-    the slack or their solve stalls (the caller grows the cluster: see :func:`_grown`)."""
-    rotation, friction, rolling = flags[FL_ROTATION], flags[FL_FRICTION], flags[FL_ROLLING]
-    e0 = _kinetic(nb, clus, rotation)
-    _impact_setup(nc, clus, pair_table, dyn.mat, rec, fsc, flags)
-    sweeps, worst, stalled, frozen = _solve_cluster(nc, clus, clus.cl_v, clus.cl_w, clus.ck_vb,
-                                                    rotation, friction, rolling,
-                                                    SOLVE_TOL_REL * space.slack[0], not final)
-    _count(isc, sweeps, nc, False, frozen)
-    if stalled:
-        return math.nan
+def _step_loss(nb, h, clus, flight, dyn, gravity, rotation):
+    """Mechanical energy the step takes from the bodies [J]: their kinetic energy now less
+    that at the step's end, plus the work of gravity over the step's motion (zero for a
+    sphere that flies, which keeps its energy; a resting one gives up its kinetic energy)."""
+    loss = 0.0
+    for b in range(nb):
+        s = clus.cl_body[b]
+        m = 1.0 / dyn.inv_m[s]
+        e = 0.0
+        for k in range(3):
+            v0 = clus.cl_v[b, k]
+            if flight.mstate[s] == MS_REST:
+                dx = v1 = 0.0
+            elif flight.mstate[s] != MS_SUPPORTED:  # flies (or on a plate): no loss booked
+                v1 = v0
+                dx = 0.0
+            else:
+                v1 = clus.cl_a[b, k]
+                dx = h * v1 if _linear(b, clus) else 0.5 * h * (v0 + v1)
+            e += 0.5 * m * (v0 * v0 - v1 * v1) + m * gravity[k] * dx
+        if rotation and flight.mstate[s] != MS_FLIGHT:
+            w2 = clus.cl_w[b, 0] ** 2 + clus.cl_w[b, 1] ** 2 + clus.cl_w[b, 2] ** 2
+            w1 = 0.0
+            if flight.mstate[s] == MS_SUPPORTED:
+                w1 = clus.cl_al[b, 0] ** 2 + clus.cl_al[b, 1] ** 2 + clus.cl_al[b, 2] ** 2
+            e += 0.5 * (w2 - w1) / dyn.inv_i[s]
+        loss += e
+    return loss
+
+
+@njit
+def _solve(nb, nc, seed, t, h, reach, flight, dyn, walls, space, grid, sched, clus, isc,
+           pair_table, fsc, rec, flags):
+    """One step of length h [s] and reach ``reach`` [m] of the gathered cluster (see the module):
+    its solve, motion and motion states; the impulse of contact ``seed`` (or −1) goes to ``rec`` for
+    the event log. Returns the energy the step took [J]."""
+    rotation = flags[FL_ROTATION]
+    _setup(nb, nc, h, space.slack[0], clus, walls, pair_table, dyn.mat, rec, space.gravity,
+           fsc[F_LANDING_SPEED], flags)
+    status = _concave_rounds(nb, nc, h, clus, isc, walls, space, flags)
+    _rest_candidates(nb, nc, clus, fsc, space.gravity)
+    if status == STEP_SOLVED and _hold_rests(nb, nc, clus):
+        status = _concave_rounds(nb, nc, h, clus, isc, walls, space, flags)
+    if status == STEP_SOLVED:
+        _warm_store(nb, nc, h, clus)
     for k in range(rec.shape[0]):
         rec[k] = math.nan
     rec[REC_J_N] = clus.ck_pn[seed] if seed >= 0 else 0.0
@@ -896,25 +1081,10 @@ def _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc, p
                              + clus.ck_pt[seed, 2] ** 2) if seed >= 0 else 0.0
     rec[REC_STAGE] = STAGE_CLUSTER
     rec[REC_REGIME] = nb
-    loss = e0 - _kinetic(nb, clus, rotation)
-    h = _segment_time(nc, clus, MAX_SEGMENT, False, t, walls)
-    _step_setup(nb, nc, h, clus, space.gravity, fsc[F_LANDING_SPEED], rotation, friction,
-                rolling)
-    solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling, not final)
-    _rest_candidates(nb, nc, clus, fsc, space.gravity)
-    if solved and _hold_rests(nb, nc, clus):
-        solved = _solve_step(nb, nc, h, clus, isc, space, rotation, friction, rolling,
-                             not final)
-    if not final and (not solved or worst > space.slack[0]):
-        return math.nan
-    if solved:
-        _warm_store(nb, nc, h, clus)
-    _accelerations(nb, h, clus)
-    tau = _segment_time(nc, clus, h, True, t, walls)
-    if tau <= MIN_SEGMENT_REL * max(1.0, t):
+    if h <= MIN_SEGMENT_REL * max(1.0, t):
         isc[I_SHORT] += 1
-    loss += _apply_states(nb, nc, t, tau, flight, dyn, walls, space, grid, sched, clus, isc,
-                          pair_table, fsc, flags)
+    _apply_states(nb, nc, t, h, reach, flight, dyn, walls, space, grid, sched, clus, isc, flags)
+    loss = _step_loss(nb, h, clus, flight, dyn, space.gravity, rotation)
     fsc[F_CLUSTER_LOSS] += loss
     rec[REC_ENERGY_LOST] = loss
     return loss
@@ -928,13 +1098,6 @@ def _seed_contact(nc, clus, j, w):
                                                                       clus.ck_q[c] == -1 - w)):
             return c
     return -1
-
-
-@njit(inline="always")
-def _reach(flags):
-    """How many contacts away from the event's spheres moving spheres join a cluster: all
-    with the cluster treatment, HAND_OVER_REACH with the pairwise rules."""
-    return np.int64(1 << 30) if flags[FL_CLUSTERS] else np.int64(HAND_OVER_REACH)
 
 
 @njit(inline="always")
@@ -977,26 +1140,24 @@ def hands_over_pair(i, j, flight, dyn, walls, space, pair_table, fsc, flags):
 
 
 @njit
-def _grown(i, j, w, t, fast, nb, nc, left, flight, dyn, walls, space, grid, sched, clus, isc,
-           pair_table, fsc, rec, flags):
-    """Solve the cluster of sphere i (and sphere j ≥ 0 or wall w) at time t [s], gathered
-    (nb bodies, nc contacts; ``left``: moving spheres were left out as its boundary); where
-    the solve stops short of the slack, or stalls, while moving spheres were
-    left out (HAND_OVER_REACH), gather it again reaching twice as far and solve that (a
-    boundary sphere pressing a body against fixed walls can leave it no motion that
-    approaches nothing, or none that its friction allows). Returns the energy taken [J]."""
-    reach = _reach(flags)
-    while True:
-        final = not left or nb >= clus.cl_body.shape[0]
-        seed = _seed_contact(nc, clus, j, w) if (j >= 0 or w >= 0) else -1
-        loss = _solve(nb, nc, seed, t, flight, dyn, walls, space, grid, sched, clus, isc,
-                      pair_table, fsc, rec, flags, final)
-        release(nb, clus)
-        if loss == loss:  # (not NaN: solved, and written back)
-            return loss
-        reach *= 2
-        nb, nc, _, left = gather(i, j, t, fast, reach, flight, dyn, walls, space, grid, clus,
-                                 flags[FL_ROTATION])
+def _stepped(i, j, w, t, fast, nb, nc, flight, dyn, walls, space, grid, sched, clus, isc,
+             pair_table, fsc, rec, flags):
+    """The next step of the cluster of sphere i (and sphere j ≥ 0 or wall w) from time t [s],
+    gathered with its touching contacts (nb bodies, nc contacts): its length and reach from
+    those (:func:`_step_of`), the cluster gathered again within that reach, and solved. Where
+    the contacts within the reach do not fit the scratch arrays, those that do are solved and
+    none is held (each is then an event). Returns the energy taken [J]."""
+    h, reach = _step_of(nb, nc, t, clus, space.gravity, fsc[F_LANDING_SPEED])
+    release(nb, clus)
+    nb, nc, _, _ = gather(i, j, t, fast, ALL_CONTACTS, reach, flight, dyn, walls, space, grid,
+                          clus, flags[FL_ROTATION])
+    if nc >= clus.ck_a.shape[0]:
+        reach = NO_REACH
+    seed = _seed_contact(nc, clus, j, w) if (j >= 0 or w >= 0) else -1
+    loss = _solve(nb, nc, seed, t, h, reach, flight, dyn, walls, space, grid, sched, clus, isc,
+                  pair_table, fsc, rec, flags)
+    release(nb, clus)
+    return loss
 
 
 @njit
@@ -1004,8 +1165,9 @@ def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, 
                       fsc, rec, flags):
     """A collision of sphere i with sphere j (j ≥ 0) or plane w at time t [s] under gravity:
     CL_ISOLATED if the two touch nothing else and fly (the caller collides them as a pair;
-    nothing has changed but the spheres' stored states, advanced to t), else the cluster is
-    solved (CL_SOLVED; ``rec`` holds the event's impulse and the energy taken)."""
+    nothing has changed but the spheres' stored states, advanced to t), else the cluster
+    takes a step from t (CL_SOLVED; ``rec`` holds the event's impulse and the energy
+    taken)."""
     mstate, st, v_land = flight.mstate, flight.st, fsc[F_LANDING_SPEED]
     if j >= 0:
         un = 0.0
@@ -1019,8 +1181,8 @@ def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, 
         un = (st[i, 3] * walls.planes_n[w, 0] + st[i, 4] * walls.planes_n[w, 1]
               + st[i, 5] * walls.planes_n[w, 2])
     fast = un < -v_land
-    nb, nc, driven, left = gather(i, j, t, fast, _reach(flags), flight, dyn, walls, space,
-                                  grid, clus, flags[FL_ROTATION])
+    nb, nc, driven, _ = gather(i, j, t, fast, ALL_CONTACTS, 0.0, flight, dyn, walls, space,
+                               grid, clus, flags[FL_ROTATION])
     if (nc == 1 and nb == (2 if j >= 0 else 1) and mstate[i] == MS_FLIGHT
             and (j < 0 or mstate[j] == MS_FLIGHT)) or (
             driven and not flags[FL_CLUSTERS] and mstate[i] != MS_SUPPORTED
@@ -1029,20 +1191,37 @@ def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, 
         # which the treatment takes only as it moves now: left to the pairwise rules
         release(nb, clus)
         return CL_ISOLATED
-    _grown(i, j, w, t, fast, nb, nc, left, flight, dyn, walls, space, grid, sched, clus, isc,
-           pair_table, fsc, rec, flags)
+    _stepped(i, j, w, t, fast, nb, nc, flight, dyn, walls, space, grid, sched, clus, isc,
+             pair_table, fsc, rec, flags)
     return CL_SOLVED
 
 
 @njit
 def cluster_resolve(i, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table, fsc,
                     rec, flags):
-    """Sphere i's segment has ended (or a support of it moved): solve its cluster again at
-    time t [s]. Returns the energy taken [J]."""
-    nb, nc, _, left = gather(i, -1, t, False, _reach(flags), flight, dyn, walls, space, grid,
-                             clus, flags[FL_ROTATION])
-    return _grown(i, -1, -1, t, False, nb, nc, left, flight, dyn, walls, space, grid, sched,
-                  clus, isc, pair_table, fsc, rec, flags)
+    """Sphere i's step has ended (or a support of it moved): its cluster takes its next step
+    from time t [s]; a sphere that touches nothing flies on, and one that touches a fixed
+    flat wall alone takes the paper's motion on it (MODEL §5.3), without a solve. Returns the
+    energy taken [J]."""
+    nb, nc, _, _ = gather(i, -1, t, False, ALL_CONTACTS, 0.0, flight, dyn, walls, space, grid,
+                          clus, flags[FL_ROTATION])
+    if nb == 1 and (nc == 0 or (nc == 1 and clus.ck_q[0] < 0
+                                and flat_fixed(walls, -1 - clus.ck_q[0]))):
+        release(nb, clus)
+        rotation = flags[FL_ROTATION]
+        leave_plane(i, flight, dyn, space.gravity, rotation)
+        flight.mplane[i] = -1
+        if nc == 1:
+            enter_plane(i, np.int64(-1 - clus.ck_q[0]), t, np.int64(END_NONE), flight, dyn,
+                        walls, space.gravity, pair_table, fsc, flags[FL_FRICTION],
+                        flags[FL_ROLLING], rotation)
+        flight.counter[i] += 1
+        reschedule_fn(i, t, flight, walls, space, grid, sched, isc, True)
+        for k in range(rec.shape[0]):
+            rec[k] = math.nan
+        return 0.0
+    return _stepped(i, -1, -1, t, False, nb, nc, flight, dyn, walls, space, grid, sched, clus,
+                    isc, pair_table, fsc, rec, flags)
 
 
 def slack(landing_speed: float) -> float:

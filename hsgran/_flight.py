@@ -65,9 +65,8 @@ PLANE_TOUCHING_REL = 1e-10
 
 #: Two bodies of a cluster of contacts (hsgran._cluster) touch when their gap is at most this
 #: fraction of their contact distance σ (of the radius, for a wall) [-]: far above the rounding
-#: of positions (1e-14 σ) and above how far a segment of constant accelerations lifts sliding
-#: spheres off each other (hsgran._cluster.CURVATURE_REL² / 2 = 5e-9), far below any gap that
-#: matters.
+#: of positions (1e-14 σ), far below any gap that matters. (A step of constrained motion also
+#: takes every contact within its reach, touching or not.)
 TOUCH_REL = 1e-6
 
 #: A sphere whose event happens less than NO_PROGRESS_REL × max(1 s, t) after its previous one

@@ -9,16 +9,17 @@ pair event whose partner has moved on since is known to be stale (lazy invalidat
 
 from __future__ import annotations
 
-from hsgran._cylinder import across_axis, axis_offset, concave
+from hsgran._cylinder import across_axis, axis_offset
 from hsgran._flight import (
     PLANE_TOUCHING_REL,
-    TOUCH_REL,
+    min_image,
     moving,
     state_at,
+    wall_gap,
 )
 from hsgran._jit import njit, prefetch
 from hsgran._riding import moving_gap
-from hsgran._state import I_PEND_A, I_PEND_B, I_SEQ, S_R
+from hsgran._state import I_PEND_A, I_PEND_B, I_SEQ, S_R, S_T
 from hsgran.events.calendar import calendar_update, has_buckets
 from hsgran.events.grid import slot_of
 from hsgran.events.kinds import EV_CELL, EV_EXIT, EV_NONE, EV_PAIR, EV_STATE, EV_WALL
@@ -39,7 +40,7 @@ from hsgran.motion import (
     plane_contact_time,
     plane_gap,
 )
-from hsgran.onplane import MS_FLIGHT, MS_SUPPORTED
+from hsgran.onplane import MS_FLIGHT, MS_REST, MS_SUPPORTED
 from hsgran.outlets import outlet_entry_time
 from hsgran.wallmotion import moving_plane_contact_time
 from hsgran.wallspec import (
@@ -135,49 +136,38 @@ def axis_cells(c, n, length, periodic, k, ac, ah):
 
 
 @njit(inline="always")
-def held_apart(dx, dy, dz, dvx, dvy, dvz, dax, day, daz, sigma, slack, horizon):
-    """Whether a pair with a supported sphere (hsgran._cluster), at separation d = (dx, dy, dz)
-    [m], relative velocity dv [m/s] and acceleration da [m/s²], touches (gap ≤ TOUCH_REL σ)
-    with a normal velocity that stays above −``slack`` [m/s] for the ``horizon`` [s] its
-    constant accelerations last: then it does not meet within them (its gap changes as
-    2σ n·D + |D|² with n·D ≥ −slack τ, D = dv τ + da τ²/2)."""
-    d2 = dx * dx + dy * dy + dz * dz
-    reach = sigma * (1.0 + TOUCH_REL)
-    if d2 > reach * reach:
+def held_pair(i, j, flight, space):
+    """Whether the pair of spheres i and j is held apart by a step of constrained motion
+    (hsgran._cluster): one of them in constrained motion, the other in the same step (the same
+    start and end) or at rest since before it began, and their gap at the step's start within
+    the step's reach (``seg_reach``). The step's solve kept that gap from closing over the
+    whole step, so no contact of theirs falls within it."""
+    mstate, st, seg_end, reach = flight.mstate, flight.st, flight.seg_end, flight.seg_reach
+    if mstate[i] == MS_SUPPORTED:
+        s, o = i, j
+    elif mstate[j] == MS_SUPPORTED:
+        s, o = j, i
+    else:
         return False
-    d = max(d2 ** 0.5, 1e-300)
-    vn = (dx * dvx + dy * dvy + dz * dvz) / d
-    an = (dx * dax + dy * day + dz * daz) / d
-    return vn >= -slack and vn + min(an, 0.0) * horizon >= -slack
+    held = reach[s]
+    if mstate[o] == MS_SUPPORTED:
+        if st[o, S_T] != st[s, S_T] or seg_end[o] != seg_end[s]:
+            return False
+        held = min(held, reach[o])
+    elif mstate[o] != MS_REST or st[o, S_T] > st[s, S_T]:
+        return False
+    dx = min_image(st[s, 0] - st[o, 0], 0, space.box_len, space.periodic)
+    dy = min_image(st[s, 1] - st[o, 1], 1, space.box_len, space.periodic)
+    dz = min_image(st[s, 2] - st[o, 2], 2, space.box_len, space.periodic)
+    return (dx * dx + dy * dy + dz * dz) ** 0.5 - st[s, S_R] - st[o, S_R] <= held
 
 
 @njit(inline="always")
-def held_by_wall(x, y, z, u, v, w_, gx, gy, gz, r, walls, w, slack, horizon):
-    """Whether a supported sphere (hsgran._cluster) of radius r [m] at (x, y, z) [m] with
-    velocity (u, v, w_) [m/s] and acceleration (gx, gy, gz) [m/s²] touches wall w, a fixed
-    sphere, a corner, an edge or a cylinder, with a normal velocity that stays above
-    −``slack`` [m/s] for ``horizon`` [s]: then it does not meet it within them. A convex wall
-    (a sphere, a corner, an edge, a cylinder from outside) curves away from the sphere's
-    path, as a partner sphere does (:func:`held_apart`); inside a cylinder the path sinks
-    into the wall by at most what the segment's length allows
-    (hsgran._cluster.CONCAVE_SINK_REL), which the next solve takes back."""
-    p = walls.planes_p
-    if walls.planes_kind[w] == WK_BALL:
-        return held_apart(x - p[w, 0], y - p[w, 1], z - p[w, 2], u, v, w_, gx, gy, gz,
-                          r + walls.planes_geo[w, BL_RADIUS], slack, horizon)
-    cyl = walls.planes_cyl
-    qx, qy, qz = axis_offset(x, y, z, walls, w)
-    ux, uy, uz = across_axis(u, v, w_, walls, w)
-    ax, ay, az = across_axis(gx, gy, gz, walls, w)
-    if not concave(walls, w):  # from outside, or an edge
-        return held_apart(qx, qy, qz, ux, uy, uz, ax, ay, az, r + cyl[w, CY_RADIUS], slack,
-                          horizon)
-    d = max((qx * qx + qy * qy + qz * qz) ** 0.5, 1e-300)
-    if cyl[w, CY_RADIUS] - d - r > TOUCH_REL * r:
-        return False
-    vn = -(qx * ux + qy * uy + qz * uz) / d  # the normal points to the axis
-    an = -(qx * ax + qy * ay + qz * az) / d
-    return vn >= -slack and vn + min(an, 0.0) * horizon >= -slack
+def held_wall(i, w, flight, walls):
+    """Whether sphere i, in constrained motion, is held off wall w by its step: a fixed wall
+    whose gap at the step's start is within the step's reach (see :func:`held_pair`)."""
+    return (flight.mstate[i] == MS_SUPPORTED and not moving(walls, w)
+            and wall_gap(i, w, flight.st, walls) <= flight.seg_reach[i])
 
 
 @njit(inline="always")
@@ -317,11 +307,9 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
         ny = planes_n[w, 1]
         nz = planes_n[w, 2]
         wkind = walls.planes_kind[w]
+        if supported and held_wall(i, w, flight, walls):
+            continue  # held off the wall by its step: no contact within it
         if wkind != WK_PLANE and wkind != WK_FACE:
-            if supported and not moving(walls, w) and held_by_wall(
-                    xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], ri, walls, w, space.slack[0],
-                    seg_end[i] - t_now):
-                continue  # held by the wall: no contact within the segment
             tau = other_wall_time(xi, yi, zi, ui, vi, wi, gi[0], gi[1], gi[2], ri, walls, w,
                                   t_now, best)
             if tau < best:
@@ -340,9 +328,6 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
             gap = 0.0
         gn = gi[0] * nx + gi[1] * ny + gi[2] * nz
         vn = ui * nx + vi * ny + wi * nz
-        if supported and gap <= TOUCH_REL * ri and vn >= -space.slack[0] \
-                and vn + min(gn, 0.0) * (seg_end[i] - t_now) >= -space.slack[0]:
-            continue  # held by the plane: no contact within the segment (held_apart)
         tau = plane_contact_time(gap, vn, gn, abs(ui) + abs(vi) + abs(wi))
         if wkind == WK_FACE and tau < best:
             # a face's plane met off the face is no contact (hsgran.facets)
@@ -431,10 +416,8 @@ def predict(i, t_now, flight, walls, space, grid, sched, isc, grav_on, layer):
             if j != i:
                 xj, yj, zj, uj, vj, wj = state_at(st, acc, j, t_now, grav_on)
                 horizon = min(best, pbest) if grav_on else pbest
-                if grav_on and (supported or mstate[j] == MS_SUPPORTED) and held_apart(
-                        ox - xj, oy - yj, oz - zj, ui - uj, vi - vj, wi - wj, gi[0] - acc[j, 0],
-                        gi[1] - acc[j, 1], gi[2] - acc[j, 2], ri + st[j, S_R], space.slack[0],
-                        min(seg_end[i], seg_end[j]) - t_now):
+                if grav_on and (supported or mstate[j] == MS_SUPPORTED) and held_pair(
+                        i, j, flight, space):
                     tau = NEVER
                 elif grav_on and (acc[j, 0] != gi[0] or acc[j, 1] != gi[1] or acc[j, 2] != gi[2]):
                     # different accelerations (one of them on a plane): a quartic, wanted only

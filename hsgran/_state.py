@@ -28,14 +28,16 @@ from hsgran.wallspec import CY_SIZE, GEO_SIZE, M_SIZE
 #: of hsgran._loop: position [m], velocity [m/s], local time [s], radius [m]); ``counter``:
 #: event counters; with gravity ``acc`` [m/s²], motion state ``mstate`` (hsgran.onplane MS_*),
 #: plane ``mplane`` (or −2 − b when asleep on sphere b), end time ``seg_end`` [s] and kind
-#: ``seg_code`` (END_*) of the on-plane motion segment; without gravity, each sphere's earliest
+#: ``seg_code`` (END_*) of the on-plane motion segment (or of a step of constrained motion, whose
+#: contacts within ``seg_reach`` [m] of the sphere at the step's start the step's solve holds
+#: apart, hsgran._cluster); without gravity, each sphere's earliest
 #: pair contact at its last prediction (``pc_t`` [s], ``pc_partner`` or −1, ``pc_count``: the
 #: partner's counter then), which lets a cell crossing look at the new layer of cells only.
 #: ``present``: with outlets or inflows only (docs/open-systems.md), 1 for a sphere in the
 #: system and 0 for one that has left or not yet entered (not in the grid or the calendar;
 #: empty in a closed system).
-Flight = namedtuple("Flight", "st counter acc mstate mplane seg_end seg_code pc_t pc_partner "
-                              "pc_count present")
+Flight = namedtuple("Flight", "st counter acc mstate mplane seg_end seg_code seg_reach pc_t "
+                              "pc_partner pc_count present")
 #: What a collision needs in addition. ``omg`` spins [rad/s]; ``inv_m`` [1/kg], ``inv_i``
 #: [1/(kg m²)]; ``mat`` material index; ``zstreak`` events in succession without the clock
 #: advancing (collapse guard); ``alpha`` [rad/s²] and ``seg_dir`` (the direction a segment's end
@@ -80,16 +82,20 @@ Sched = namedtuple("Sched", "ev_t ev_seq ev_kind ev_partner ev_pcount cal")
 #: bodies (``cl_body`` the sphere of each, ``cl_loc`` each sphere's body or −1, ``cl_was`` its
 #: motion state before, ``cl_depth`` its contact distance from the event's spheres; inverse mass
 #: [1/kg], inverse moment of inertia [1/(kg m²)], radius [m]; velocities ``cl_v`` [m/s] and
-#: spins ``cl_w`` [rad/s], accelerations ``cl_a`` [m/s²] and ``cl_al`` [rad/s²]) and the
-#: contacts (``ck_*``: the arrays of hsgran.contact.cluster.solve, the partner ``ck_q`` (a
-#: sphere, or −1 − w for plane w), its material ``ck_mat``, and the immovable body's
-#: acceleration ``ck_ab`` [m/s²]); and, kept from solve to solve (not scratch), the contact
-#: forces of the last solve that warm-start the next (``wm_q`` the partner of each of a
-#: sphere's WARM_SLOTS entries, a sphere or −1 − w for plane w, or WARM_EMPTY; ``wm_f`` the
-#: force [N] and rolling torque [N m] on the sphere, by the pair's lower sphere index).
+#: spins ``cl_w`` [rad/s], the step's end velocities ``cl_a`` [m/s] and spins ``cl_al``
+#: [rad/s], ``cl_root`` the union-find links of the bodies whose motion over the step is
+#: linear) and the contacts (``ck_*``: the arrays of hsgran.contact.cluster.solve, the partner
+#: ``ck_q`` (a sphere, or −1 − w for plane w), its material ``ck_mat``, the immovable body's
+#: acceleration ``ck_ab`` [m/s²], the gap ``ck_gap`` [m] at the step's start, ``ck_reb`` the
+#: rebound target [m/s] of an impact, NaN for other contacts); and, kept
+#: from solve to solve (not scratch), the contact forces of the last solve that warm-start
+#: the next (``wm_q`` the partner of each of a sphere's WARM_SLOTS entries, a sphere or
+#: −1 − w for plane w, or WARM_EMPTY; ``wm_f`` the force [N] and rolling torque [N m] on the
+#: sphere, by the pair's lower sphere index).
 Clus = namedtuple("Clus", "cl_body cl_loc cl_was cl_depth cl_inv_m cl_inv_i cl_rad cl_v cl_w "
-                          "cl_a cl_al ck_a ck_b ck_q ck_mat ck_n ck_rb ck_vb ck_ab ck_tgt ck_mu "
-                          "ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr wm_q wm_f")
+                          "cl_a cl_al cl_root ck_a ck_b ck_q ck_mat ck_n ck_rb ck_vb ck_ab ck_gap "
+                          "ck_reb ck_tgt ck_mu ck_slip ck_mur ck_reff ck_rslip ck_pn ck_pt ck_hr "
+                          "wm_q wm_f")
 #: Output buffers: frame times [s], positions [m], velocities [m/s], spins [rad/s], the event
 #: log (floats ``log_f``: time, J_n, J_t, e_n, and sphere i's velocity after the event; ints
 #: ``log_i``: kind, i, j, stage, regime) and
@@ -331,6 +337,7 @@ FIELDS = (
     _f("Flight", "mplane", "i4", ("g",), fill=-1),
     _f("Flight", "seg_end", "f8", ("g",), fill=np.inf),
     _f("Flight", "seg_code", "i1", ("g",)),
+    _f("Flight", "seg_reach", "f8", ("g",), fill=-1.0),
     _f("Flight", "pc_t", "f8", ("c",), fill=np.inf, packed=True),
     _f("Flight", "pc_partner", "i4", ("c",), fill=-1, packed=True),
     _f("Flight", "pc_count", "i8", ("c",), packed=True),
@@ -396,6 +403,7 @@ FIELDS = (
     _f("Clus", "cl_w", "f8", ("cb", 3)),
     _f("Clus", "cl_a", "f8", ("cb", 3)),
     _f("Clus", "cl_al", "f8", ("cb", 3)),
+    _f("Clus", "cl_root", "i4", ("cb",)),
     _f("Clus", "ck_a", "i8", ("ck",)),
     _f("Clus", "ck_b", "i8", ("ck",)),
     _f("Clus", "ck_q", "i8", ("ck",)),
@@ -404,6 +412,8 @@ FIELDS = (
     _f("Clus", "ck_rb", "f8", ("ck",)),
     _f("Clus", "ck_vb", "f8", ("ck", 3)),
     _f("Clus", "ck_ab", "f8", ("ck", 3)),
+    _f("Clus", "ck_gap", "f8", ("ck",)),
+    _f("Clus", "ck_reb", "f8", ("ck",)),
     _f("Clus", "ck_tgt", "f8", ("ck",)),
     _f("Clus", "ck_mu", "f8", ("ck",)),
     _f("Clus", "ck_slip", "f8", ("ck", 3)),

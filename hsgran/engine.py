@@ -86,8 +86,9 @@ VISITS_PER_CALL = 100_000_000
 #: of walls every prediction looks at ``n_global``, in place of their rows; 14: the cluster
 #: solves' warm-start forces under gravity with either treatment, since the pairwise rules
 #: hand zero-time sequences over to cluster solves; 15: the count of cluster solves whose
-#: friction was frozen unconverged, ``I_FROZEN``).
-CHECKPOINT_VERSION = 15
+#: friction was frozen unconverged, ``I_FROZEN``; 16: constrained motion in steps, each
+#: sphere's ``seg_reach``).
+CHECKPOINT_VERSION = 16
 
 
 class SimulationError(HsgranError):

@@ -202,10 +202,10 @@ def test_a_slow_sphere_is_not_halted_while_a_moving_partner_closes_on_it(partner
     """A solve puts a body to rest only where nothing that goes on moving approaches it now
     (``_cluster._rest_candidates``): halted, it would be met at once, and the same solve would
     follow again and again (a zero-time sequence: a corpus box at 0.487 s). Side by side along
-    x, so that neither rests on the other: a body slower than the landing speed and still at
-    the step's end rests unless its partner, a moving body or a moving boundary sphere, closes
-    on it faster than the prediction's slack."""
-    from hsgran._cluster import NO_CONTACT, _rest_candidates
+    x, so that neither rests on the other: a body at a standstill now and at the step's end
+    rests unless its partner, a moving body or a moving boundary sphere, closes on it faster
+    than the prediction's slack."""
+    from hsgran._cluster import _rest_candidates
     from hsgran._state import F_LANDING_SPEED, GROUPS, Clus
 
     sim = Simulation(scene(FLOOR + sphere(("0.0", "0.0", num(R)))
@@ -219,9 +219,10 @@ def test_a_slow_sphere_is_not_halted_while_a_moving_partner_closes_on_it(partner
         arr[:] = 0.0
     clus.ck_a[0] = 0  # the slow body, at x = 0; n from the partner (at +x) to it: −x
     clus.ck_n[0] = (-1.0, 0.0, 0.0)
-    clus.ck_tgt[0] = 0.0  # persisting
-    assert clus.ck_tgt[0] != NO_CONTACT
-    clus.cl_v[0] = (0.0, 2e-4, 0.0)  # slower than the landing speed, and still at the step's end
+    clus.ck_gap[0] = 0.0  # touching
+    clus.ck_pn[0] = 1e-9  # and carrying an impulse in the step
+    clus.cl_v[0] = (0.0, 5e-8, 0.0)  # at a standstill (below SLIP_REL × v_land), now and at
+    # the step's end
     clus.cl_depth[:2] = 0
     if partner == "sphere":
         clus.ck_b[0] = 1
@@ -243,7 +244,7 @@ def test_a_call_of_the_compiled_loop_ends_after_its_budget_of_solver_work(monkey
     """The run hands control back (``stop``, progress, checkpoints) after about
     VISITS_PER_CALL contact visits of the cluster solves, not only after EVENTS_PER_CALL
     events; cutting the run there changes nothing. A sphere rolling down a groove is solved
-    again at every segment end (MAX_SEGMENT = 1 ms): with a budget of one visit each solve
+    again at every step's end (STEP_MAX = 0.1 ms): with a budget of one visit each solve
     ends a call."""
     import hsgran.engine as engine
 
@@ -257,7 +258,7 @@ def test_a_call_of_the_compiled_loop_ends_after_its_budget_of_solver_work(monkey
     calls = []
     summary = cut.run(stop=lambda: calls.append(cut.time) and False)
     assert not summary.interrupted
-    assert len(calls) >= 40  # one call per solve (50 segment ends), not one for the run
+    assert len(calls) >= 400  # one call per solve (500 step ends), not one for the run
     np.testing.assert_array_equal(cut.pos, whole.pos)
     np.testing.assert_array_equal(cut.vel, whole.vel)
 

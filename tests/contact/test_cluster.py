@@ -14,6 +14,7 @@ from hsgran.contact.cluster import (
     FRICTION_SWEEPS,
     MAX_SWEEPS,
     STALL_SWEEPS,
+    refine_normals,
     solve,
     solve_polished,
     start,
@@ -445,3 +446,54 @@ def test_spare_rows_of_the_body_arrays_change_nothing():
     np.testing.assert_array_equal(roomy.w[:n], tight.w)
     np.testing.assert_array_equal(roomy.v[n:], left_v)
     np.testing.assert_array_equal(roomy.w[n:], left_w)
+
+
+def _refine(c, pn=None, tol=SOLVE_TOL):
+    """Run refine_normals on Cluster ``c`` (normals only) from impulses ``pn`` (applied to
+    ``c.v`` first) or none; returns (worst, pn)."""
+    col = list(zip(*c.rows, strict=True))
+    nc = len(c.rows)
+    ca, cb, cn = np.array(col[0], np.int64), np.array(col[1], np.int64), np.array(col[2])
+    pn = np.zeros(nc) if pn is None else np.asarray(pn, float).copy()
+    for k in range(nc):  # the starting impulses in the velocities, as the solver keeps them
+        c.v[ca[k]] += c.inv_m[ca[k]] * pn[k] * cn[k]
+        if cb[k] >= 0:
+            c.v[cb[k]] -= c.inv_m[cb[k]] * pn[k] * cn[k]
+    worst = refine_normals(nc, ca, cb, cn, np.array(col[4]), np.array(col[5], float), c.inv_m,
+                           c.v, pn, tol)
+    return worst, pn
+
+
+@pytest.mark.parametrize("n", [1, 5, 20])
+def test_the_normal_refinement_gives_a_columns_weights_at_once(n):
+    """A column of n spheres on a plate at the end of a step h without contacts (each at
+    −g h): the active-set finish (refine_normals) meets every contact (velocity 0) and gives
+    contact k the impulse of the n − k spheres above it, from no impulse and from a wrong one."""
+    h = 1e-4
+    for start_pn in (None, np.full(n, 3.0 * M * G * h)):
+        c = Cluster(n)
+        c.v[:, 2] = -G * h
+        c.contact(0, -1, (0.0, 0.0, 1.0))
+        for k in range(1, n):
+            c.contact(k, k - 1, (0.0, 0.0, 1.0))
+        worst, pn = _refine(c, start_pn)
+        assert worst <= SOLVE_TOL
+        np.testing.assert_allclose(pn, M * G * h * np.arange(n, 0, -1), rtol=1e-9)
+        np.testing.assert_allclose(c.v, 0.0, atol=SOLVE_TOL)
+
+
+def test_the_normal_refinement_meets_a_jammed_row_that_has_many_solutions():
+    """A row of four spheres jammed between two walls, the middle ones driven into them (its
+    impulses are not unique: any compression of the whole row meets every contact): the
+    finish meets every contact with impulses ≥ 0 and leaves no sphere approaching a wall or a
+    neighbour."""
+    c = Cluster(4)
+    c.v[1, 0], c.v[2, 0] = 0.3, -0.2
+    c.contact(0, -1, (1.0, 0.0, 0.0))  # the wall at left pushes +x on sphere 0
+    for k in range(1, 4):
+        c.contact(k, k - 1, (1.0, 0.0, 0.0))
+    c.contact(3, -1, (-1.0, 0.0, 0.0))  # the wall at right
+    worst, pn = _refine(c)
+    assert worst <= SOLVE_TOL
+    assert np.all(pn >= 0.0)
+    np.testing.assert_allclose(c.v, 0.0, atol=SOLVE_TOL)  # nothing can move in a jammed row
