@@ -124,9 +124,10 @@ STEP_TRAVEL_REL = 1e-2
 #: no collision of the step's own bodies falls within it (a faster one is an event as any).
 REACH_SAFETY = 2.0
 #: Sweeps that friction and rolling couples get in a step's solve before they are frozen and
-#: the normal impulses polished alone (hsgran.contact.cluster.solve_polished) [-]. The next
-#: step starts from these forces (its warm start), so friction goes on converging from step
-#: to step where the contacts persist; what a step leaves unconverged is counted
+#: the normal impulses polished with friction held in proportion to them
+#: (hsgran.contact.cluster.solve_polished) [-]. The next step starts from these forces (its
+#: warm start), so friction goes on converging from step to step where the contacts persist;
+#: what a step leaves unconverged is counted
 #: (``I_FROZEN``). On corpus scene 0-17 (188 spheres poured into a wedge, μ = 0.62,
 #: μ_r = 0.02) the bed comes to rest with 100 (every sphere below 1e-9 m/s by 0.32 s), where
 #: 2000 took five times the sweeps.

@@ -44,7 +44,7 @@ from hsgran.motion import ROUNDOFF
 #: the order of the square of their length.
 MAX_SWEEPS = 20000
 #: Sweeps that friction and rolling couples get before :func:`solve_polished` freezes them and
-#: polishes the normal impulses alone [-]. Where a cluster holds a slowly slipping mode (spheres
+#: polishes the normal impulses [-]. Where a cluster holds a slowly slipping mode (spheres
 #: creeping at the edge of their cones), Gauss–Seidel approaches the tangential solution only
 #: as 1/sweeps: on a 30-sphere impact cluster of a pour, the normal velocities were 8e-7 m/s
 #: from their targets after 200 sweeps and 3e-8 m/s after 2000, where a normal-only polish
@@ -52,10 +52,6 @@ MAX_SWEEPS = 20000
 #: 60-sphere pile creeping: it never came to rest; at 2000 it comes to rest as with converged
 #: friction (docs/enduring-contact.md).
 FRICTION_SWEEPS = 2000
-#: At most this many rounds of (normal polish, cones clipped) in :func:`solve_polished` [-]:
-#: each clip changes a tangential impulse by what the polish before it changed the normal one
-#: (0.15 % of the cone in the pour's cluster above), and a last polish follows the last clip.
-POLISH_ROUNDS = 3
 #: Sweeps after which a solve that may stop short (``stall`` of :func:`solve`) first asks
 #: whether it still converges, and again at every doubling of its sweeps [-].
 STALL_SWEEPS = 128
@@ -626,6 +622,185 @@ REFINE_MAX = 1500
 REFINE_RCOND = 1e-13
 
 
+#: Iterations of the projected conjugate gradients that first try to finish a normal solve
+#: (:func:`_mprgp`), per contact, and at least MPRGP_MIN [-]: conjugate gradients meet a
+#: problem of n unknowns in n iterations (in exact arithmetic, on a fixed set of active
+#: contacts); on corpus 0-39's bed (525 contacts, from the friction sweeps' impulses, 1e-6 m/s
+#: short) they met every contact to 1e-12 m/s in 141 iterations, 2 ms, where the dense finish
+#: took 60–200 ms. (From no impulse a column's contacts join one at a time, about 4n
+#: iterations; what the limit leaves unmet, the dense finish takes.)
+MPRGP_PER_CONTACT = 4
+MPRGP_MIN = 200
+#: The proportioning test's Γ of MPRGP [-] (Dostál & Schöberl 2005): a step leaves the face
+#: of the active contacts when the gradient pushing contacts off their bounds exceeds Γ times
+#: the reduced free gradient; 1 is the value their analysis and experiments use.
+MPRGP_GAMMA = 1.0
+#: The expansion step's length, as a fraction of 2/‖W‖ (Dostál & Schöberl 2005 ask for a
+#: length in (0, 2/‖W‖]; ‖W‖ is bounded by Gershgorin's row sums of the Jacobi-scaled
+#: Delassus matrix) [-].
+MPRGP_STEP = 0.95
+
+
+@njit(inline="always")
+def _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, y):
+    """y = S W S x, W the normal Delassus matrix (:func:`_delassus`), S = diag(s), through the
+    bodies' velocity changes ``dv`` (scratch, one row per body)."""
+    for i in range(dv.shape[0]):
+        dv[i, 0] = dv[i, 1] = dv[i, 2] = 0.0
+    for k in range(nc):
+        a, b = ca[k], cb[k]
+        p = x[k] * s[k]
+        for j in range(3):
+            dv[a, j] += inv_m[a] * p * cn[k, j]
+            if b >= 0:
+                dv[b, j] -= inv_m[b] * p * cn[k, j]
+    for k in range(nc):
+        a, b = ca[k], cb[k]
+        u = 0.0
+        for j in range(3):
+            u += (dv[a, j] - (dv[b, j] if b >= 0 else 0.0)) * cn[k, j]
+        y[k] = u * s[k]
+
+
+@njit(inline="always")
+def _free_gradient(nc, x, g, p):
+    """The gradient's part on the contacts that carry an impulse (MPRGP's free gradient φ)."""
+    for k in range(nc):
+        p[k] = g[k] if x[k] > 0.0 else 0.0
+
+
+# long: one algorithm (MPRGP) with its three kinds of step sharing the iterate, gradient and
+# direction; split, each would take them all
+@njit(allocates=True)
+def _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol):
+    """The normal impulses ``lam`` [N s] (updated in place, from where they are) that minimise
+    ½ λᵀWλ + qᵀλ over λ ≥ 0, W the normal Delassus matrix and q the contacts' normal
+    velocities without normal impulses less their targets [m/s] (:func:`refine_normals`): the
+    normal problem with the tangential impulses held, whose optimality conditions are the
+    contacts' Signorini conditions. Dostál's MPRGP (modified proportioning with reduced
+    gradient projections; Dostál & Schöberl 2005, Comput. Optim. Appl. 30, 23; Dostál 2009,
+    "Optimal quadratic programming algorithms", ch. 5): conjugate gradients on the face of
+    the contacts that carry an impulse, a projected expansion step where a gradient step would
+    leave the bounds, and a proportioning step releasing the contacts that pull where they
+    dominate; on the Jacobi-scaled problem (each contact's unknown in the velocity it makes).
+    Conjugate gradients converge as the square root of the condition number, where
+    Gauss–Seidel converges as the condition number itself. Stops where the natural residual
+    (:func:`_natural_residual`) is within ``tol`` [m/s] or after MPRGP_PER_CONTACT iterations
+    per contact (a problem with no solution, whose minimum is −∞). Returns the iterations."""
+    nbody = 0
+    for k in range(nc):
+        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    s = np.zeros(nc)  # λ = s x
+    rows = np.zeros(nbody)  # per body: Σ s over its contacts (Gershgorin's bound)
+    for k in range(nc):
+        a, b = ca[k], cb[k]
+        d = inv_m[a] + (inv_m[b] if b >= 0 else 0.0)
+        if d > 0.0:
+            s[k] = 1.0 / math.sqrt(d)
+        rows[a] += s[k]
+        if b >= 0:
+            rows[b] += s[k]
+    bound = 0.0
+    for k in range(nc):
+        a, b = ca[k], cb[k]
+        bound = max(bound, s[k] * (inv_m[a] * rows[a] + (inv_m[b] * rows[b] if b >= 0 else 0.0)))
+    if bound == 0.0:
+        return 0
+    step = MPRGP_STEP * 2.0 / bound
+    x, g, p, wp, d = np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc), np.zeros(nc)
+    dv = np.empty((nbody, 3))
+    for k in range(nc):
+        x[k] = lam[k] / s[k] if s[k] > 0.0 else 0.0
+    _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, g)
+    for k in range(nc):
+        g[k] += q[k] * s[k]
+    _free_gradient(nc, x, g, p)
+    most = max(MPRGP_MIN, MPRGP_PER_CONTACT * nc)
+    it = 0
+    exact = True  # g computed afresh (not by the recurrence) since the last step
+    while True:
+        res = 0.0
+        chopped = 0.0  # |β|², the chopped gradient: contacts at 0 that pull
+        reduced = 0.0  # φ̃ᵀφ, the reduced free gradient
+        for k in range(nc):
+            if s[k] == 0.0:
+                continue
+            if x[k] > 0.0:
+                res = max(res, abs(g[k]) / s[k])
+                reduced += (min(x[k] / step, g[k]) if g[k] > 0.0 else g[k]) * g[k]
+            elif g[k] < 0.0:
+                res = max(res, -g[k] / s[k])
+                chopped += g[k] * g[k]
+        if res <= tol and not exact:
+            # confirm on the gradient computed afresh (the recurrence drifts by rounding)
+            _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, g)
+            for k in range(nc):
+                g[k] += q[k] * s[k]
+            _free_gradient(nc, x, g, p)
+            exact = True
+            continue
+        if res <= tol or it >= most:
+            break
+        it += 1
+        exact = False
+        if chopped <= MPRGP_GAMMA * MPRGP_GAMMA * reduced:
+            _scaled_product(nc, ca, cb, cn, inv_m, s, p, dv, wp)
+            pwp = 0.0
+            gp = 0.0
+            for k in range(nc):
+                pwp += p[k] * wp[k]
+                gp += g[k] * p[k]
+            if not pwp > 0.0:
+                _free_gradient(nc, x, g, p)
+                break
+            cg = gp / pwp
+            feasible = math.inf
+            for k in range(nc):
+                if p[k] > 0.0:
+                    feasible = min(feasible, x[k] / p[k])
+            if cg <= feasible:  # conjugate gradient step
+                for k in range(nc):
+                    x[k] -= cg * p[k]
+                    g[k] -= cg * wp[k]
+                _free_gradient(nc, x, g, d)
+                beta = 0.0
+                for k in range(nc):
+                    beta += d[k] * wp[k]
+                beta /= pwp
+                for k in range(nc):
+                    p[k] = d[k] - beta * p[k]
+            else:  # expansion: to the bound, then a projected gradient step
+                for k in range(nc):
+                    x[k] -= feasible * p[k]
+                    g[k] -= feasible * wp[k]
+                for k in range(nc):
+                    x[k] = max(x[k] - step * g[k], 0.0) if x[k] > 0.0 else 0.0
+                _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, g)
+                for k in range(nc):
+                    g[k] += q[k] * s[k]
+                _free_gradient(nc, x, g, p)
+                exact = True
+        else:  # proportioning: release the contacts at 0 that pull
+            for k in range(nc):
+                d[k] = min(g[k], 0.0) if x[k] <= 0.0 else 0.0
+            _scaled_product(nc, ca, cb, cn, inv_m, s, d, dv, wp)
+            dwd = 0.0
+            gd = 0.0
+            for k in range(nc):
+                dwd += d[k] * wp[k]
+                gd += g[k] * d[k]
+            if not dwd > 0.0:
+                break
+            a = gd / dwd
+            for k in range(nc):
+                x[k] -= a * d[k]
+                g[k] -= a * wp[k]
+            _free_gradient(nc, x, g, p)
+    for k in range(nc):
+        lam[k] = x[k] * s[k]
+    return it
+
+
 @njit(inline="always")
 def _push_normals(nc, ca, cb, cn, inv_m, pn, v, sign):
     """Add ``sign`` times the velocity changes [m/s] of the normal impulses ``pn`` [N s] to the
@@ -653,19 +828,19 @@ def _natural_residual(nc, lam, g):
 
 @njit(allocates=True)
 def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
-    """Finish a normal solve that Gauss–Seidel could not (the arguments as in :func:`solve`;
-    the tangential impulses and rolling couples as they are, in ``v``): an active-set method
-    on the contacts' normal impulses alone. Gauss–Seidel converges slowly where a bed's
-    contacts are redundant (a row of spheres jammed between two walls): its Delassus matrix
-    W then has near-zero eigenvalues, and the sweeps stall some 1e-8 m/s short of the targets.
-    Each round solves W_AA P_A = −q_A (least squares, the smallest impulses) for the set A of
-    the contacts that carry an impulse or do not exceed their target by more than ``tol``
-    (violated or just met: a column's contacts above its base, met before the base pushes,
-    join in the same round), q the normal velocities without the normal impulses less the
-    targets, and keeps P ≥ 0. Its residual is each contact's shortfall and, where it carries
-    an impulse, its excess (complementarity); it stops where that is within ``tol``. ``v``
-    and ``pn`` are updated where the residual ends below where it began. Returns the largest
-    shortfall of a normal velocity afterwards."""
+    """Finish a normal solve that Gauss–Seidel could not (the arguments as in :func:`solve`; the
+    tangential impulses and rolling couples as they are, in ``v``): projected conjugate gradients
+    (:func:`_mprgp`), and where those do not meet ``tol``, an active-set method on the contacts'
+    normal impulses alone. Gauss–Seidel converges slowly where a bed's contacts are redundant (a row
+    of spheres jammed between two walls): its Delassus matrix W then has near-zero eigenvalues, and
+    the sweeps stall some 1e-8 m/s short of the targets. Each round of the active-set method solves
+    W_AA P_A = −q_A (least squares, the smallest impulses) for the set A of the contacts that carry
+    an impulse or do not exceed their target by more than ``tol`` (violated or just met: a column's
+    contacts above its base, met before the base pushes, join in the same round), q the normal
+    velocities without the normal impulses less the targets, and keeps P ≥ 0. Its residual is each
+    contact's shortfall and, where it carries an impulse, its excess (complementarity); it stops
+    where that is within ``tol``. ``v`` and ``pn`` are updated where the residual ends below where
+    it began. Returns the largest shortfall of a normal velocity afterwards."""
     nbody = 0
     for k in range(nc):
         nbody = max(nbody, ca[k] + 1, cb[k] + 1)
@@ -688,8 +863,18 @@ def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
     begin, short = _natural_residual(nc, lam, g)
     best = begin
     best_lam = lam.copy()
+    _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol)
+    g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
+    res, worst = _natural_residual(nc, lam, g)
+    if res < best:
+        best = res
+        best_lam[:] = lam
+        short = worst
+    else:  # (no solution: the rounds start from where the finish began)
+        lam[:] = best_lam
+        g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
     active = np.zeros(nc, dtype=np.bool_)
-    for _ in range(REFINE_ROUNDS):
+    for _ in range(REFINE_ROUNDS if best > tol else 0):
         m = 0
         for k in range(nc):
             active[k] = lam[k] > 0.0 or g[k] <= tol
@@ -802,17 +987,101 @@ def _clip_cones(nc, ca, cb, cn, crb, mu, mur, reff, inv_m, inv_i, rad, v, w, pn,
     return most
 
 
+#: At most this many rounds of (normal polish, cones clipped) where the proportional polish of
+#: :func:`_polish` has no solution [-]: each clip changes a tangential impulse by what the
+#: polish before it changed the normal one (0.15 % of the cone in a pour's cluster), and a
+#: last polish follows the last clip.
+POLISH_ROUNDS = 3
+
+
 @njit
+def _polish_frozen(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, inv_i,
+                   rad, v, w, pn, pt, hr, rotation, friction, rolling, tol, stall):
+    """The normal impulses solved to ``tol`` against the tangential impulses and rolling couples
+    as they are, then the cones clipped where the new normal impulses no longer hold them, and
+    polished again, at most POLISH_ROUNDS times (the arguments as in :func:`solve`). Returns
+    :func:`solve`'s (sweeps, worst, stalled)."""
+    sweeps = 0
+    for _ in range(POLISH_ROUNDS):
+        more, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff,
+                                     rslip, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, False,
+                                     False, tol, MAX_SWEEPS, stall)
+        sweeps += more
+        if stalled or _clip_cones(nc, ca, cb, cn, crb, mu, mur, reff, inv_m, inv_i, rad, v, w,
+                                  pn, pt, hr, rotation, friction, rolling) == 0.0:
+            return sweeps, worst, stalled
+    more, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
+                                 inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, False, False, tol,
+                                 MAX_SWEEPS, stall)
+    return sweeps + more, worst, stalled
+
+
+# long: the proportional polish, and the way back to where it began when it has no solution;
+# split, the saved impulses and velocities would travel between the parts
+@njit(allocates=True)
+def _polish(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, inv_i, rad, v,
+            w, pn, pt, hr, rotation, friction, rolling, tol, stall):
+    """The normal impulses solved to ``tol`` with each tangential impulse held in proportion to
+    its contact's normal impulse (the arguments as in :func:`solve`): the ratio |P_t|/P_n and
+    the direction that the friction sweeps reached are kept, so that a change of a normal
+    impulse moves its contact's friction with it, as sliding friction does (the Coulomb
+    impulse of a contact at its cone's edge is μ P_n), and no tangential impulse leaves its
+    cone. Normal impulses do not turn the spheres, and rolling couples are felt by no
+    contact's normal velocity: those are clipped to μ_r R* P_n afterwards. Where friction
+    held in proportion locks the bodies (the problem has no solution: a body wedged by a
+    boundary that moves into it, :func:`solve`'s stall), the polish starts again from where
+    it began with the tangential impulses fixed instead (:func:`_polish_frozen`), which the
+    normal impulses can always meet. Returns :func:`solve`'s (sweeps, worst, stalled).
+
+    (Polishing against tangential impulses held fixed, then clipping the cones where the new
+    normal impulses no longer hold them, needs a polish after each clip: on a wedge's bed of
+    525 contacts, 40–80 of them at their cones' edge, four polishes of 70–115 sweeps each,
+    where the proportional one takes 140–160 sweeps.)"""
+    if not friction:
+        return _polish_frozen(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
+                              inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, friction, rolling,
+                              tol, stall)
+    ratio = np.zeros(nc)
+    along = np.zeros((nc, 3))  # −P_t/|P_t|: the kinetic branch of _sweep keeps P_t = ratio P_n
+    for k in range(nc):
+        m = math.sqrt(pt[k, 0] ** 2 + pt[k, 1] ** 2 + pt[k, 2] ** 2)
+        if m > 0.0 and pn[k] > 0.0:
+            ratio[k] = m / pn[k]
+            for j in range(3):
+                along[k, j] = -pt[k, j] / m
+    nbody = 0
+    for k in range(nc):
+        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    v0, w0 = v[:nbody].copy(), w[:nbody].copy()
+    pn0, pt0 = pn[:nc].copy(), pt[:nc].copy()
+    sweeps, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, ratio, along, mur, reff,
+                                   rslip, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, True,
+                                   False, tol, MAX_SWEEPS, True)
+    if stalled:
+        v[:nbody] = v0
+        w[:nbody] = w0
+        pn[:nc] = pn0
+        pt[:nc] = pt0
+        more, worst, stalled = _polish_frozen(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur,
+                                              reff, rslip, inv_m, inv_i, rad, v, w, pn, pt, hr,
+                                              rotation, friction, rolling, tol, stall)
+        return sweeps + more, worst, stalled
+    if rolling:
+        _clip_cones(nc, ca, cb, cn, crb, ratio, mur, reff, inv_m, inv_i, rad, v, w, pn, pt, hr,
+                    rotation, False, rolling)
+    return sweeps, worst, stalled
+
+
+@njit(allocates=True)
 def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, inv_i,
                    rad, v, w, pn, pt, hr, rotation, friction, rolling, tol,
                    friction_sweeps=FRICTION_SWEEPS, grow=False, polish_stall=False):
     """:func:`solve` (the same arguments and results) with friction and rolling couples given
-    at most ``friction_sweeps`` sweeps; if they have not converged by then, they are frozen and
-    the normal impulses alone are solved to ``tol`` (a convex problem, on which Gauss–Seidel
-    converges), then the cones clipped where the new normal impulses no longer hold the
-    frozen tangential ones, up to POLISH_ROUNDS times. The normal conditions (what keeps
-    contacts from closing) are then met to ``tol``; friction is Coulomb's, at the accuracy the
-    tangential sweeps reached.
+    at most ``friction_sweeps`` sweeps; if they have not converged by then, the normal
+    impulses are solved to ``tol`` with each tangential impulse held in proportion to its
+    normal impulse and the rolling couples clipped (:func:`_polish`): the normal conditions
+    (what keeps contacts from closing) are then met to ``tol`` and every impulse is within
+    its cone; friction is Coulomb's, at the accuracy the tangential sweeps reached.
 
     With ``grow`` (the caller can solve a larger cluster instead, where the stall may come
     from what it holds immovable), a solve that stalls (:func:`solve`; with friction or
@@ -820,14 +1089,14 @@ def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
     have no solution either) stops there and returns ``stalled`` True, the impulses
     unfinished; without it, a friction solve's stall freezes the tangential impulses as the
     end of the friction sweeps does, and a frictionless solve runs to MAX_SWEEPS. With
-    ``polish_stall`` the normal polishes stop where they stall too (a normal problem with no
+    ``polish_stall`` the normal polish stops where it stalls too (a normal problem with no
     solution: targets that bodies held between immovable partners cannot all meet; or one on
     which Gauss–Seidel converges too slowly, a bed of redundant contacts), and the
-    frictionless solve as well, and are finished directly (:func:`refine_normals`); ``worst``
-    then says how far they are from it. Returns
-    (sweeps, worst, stalled) as :func:`solve`, and whether the tangential impulses were
-    frozen before they converged (friction and rolling then hold only to the accuracy their
-    sweeps reached)."""
+    frictionless solve as well, and is finished directly (:func:`refine_normals`, with the
+    tangential impulses fixed, then the cones clipped and finished again); ``worst`` then
+    says how far they are from it. Returns (sweeps, worst, stalled) as :func:`solve`, and
+    whether the tangential impulses were frozen before they converged (friction and rolling
+    then hold only to the accuracy their sweeps reached)."""
     tangential = friction or rolling
     sweeps, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
                                    inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, friction,
@@ -839,19 +1108,10 @@ def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
         if stalled and polish_stall and worst > tol:
             worst = refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol)
         return sweeps, worst, stalled, False  # converged (or nothing tangential to freeze)
-    for _ in range(POLISH_ROUNDS):
-        more, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff,
-                                     rslip, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, False,
-                                     False, tol, MAX_SWEEPS, polish_stall)
-        sweeps += more
-        if stalled or _clip_cones(nc, ca, cb, cn, crb, mu, mur, reff, inv_m, inv_i, rad, v, w,
-                                  pn, pt, hr, rotation, friction, rolling) == 0.0:
-            break
-    else:
-        more, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff,
-                                     rslip, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, False,
-                                     False, tol, MAX_SWEEPS, polish_stall)
-        sweeps += more
+    more, worst, stalled = _polish(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
+                                   inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, friction,
+                                   rolling, tol, polish_stall)
+    sweeps += more
     if stalled and polish_stall and worst > tol:
         # the normals with friction frozen: finished directly, then the cones clipped where
         # the new normal impulses no longer hold the frozen ones, and finished again

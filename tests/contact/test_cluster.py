@@ -13,7 +13,9 @@ from hsgran.contact.cluster import (
     ANDERSON_MEMORY,
     FRICTION_SWEEPS,
     MAX_SWEEPS,
+    MPRGP_PER_CONTACT,
     STALL_SWEEPS,
+    _mprgp,
     refine_normals,
     solve,
     solve_polished,
@@ -497,3 +499,60 @@ def test_the_normal_refinement_meets_a_jammed_row_that_has_many_solutions():
     assert worst <= SOLVE_TOL
     assert np.all(pn >= 0.0)
     np.testing.assert_allclose(c.v, 0.0, atol=SOLVE_TOL)  # nothing can move in a jammed row
+
+
+def _column_problem(n, h=1e-4):
+    """A column of n spheres on a plate at the end of a step h without contacts (each at
+    −g h), as _mprgp takes it: (ca, cb, cn, inv_m, q) with q each contact's normal velocity
+    without normal impulses less its target 0."""
+    ca = np.arange(n, dtype=np.int64)
+    cb = np.arange(-1, n - 1, dtype=np.int64)
+    cn = np.tile([0.0, 0.0, 1.0], (n, 1))
+    q = np.zeros(n)
+    q[0] = -G * h  # the base approaches the plate; the others' relative velocity is 0
+    return ca, cb, cn, np.full(n, 1.0 / M), q
+
+
+@pytest.mark.parametrize("n", [5, 40, 80])
+def test_projected_conjugate_gradients_give_a_columns_weights(n):
+    """MPRGP (_mprgp) on a column of n spheres, whose Delassus matrix is a path's (condition
+    number ∝ n², Gauss–Seidel's sweeps ∝ n²), from impulses too large everywhere (every contact
+    on the free face): each contact gets the weight of the spheres above it over the step, to
+    the tolerance's impulse, in at most 2n iterations (conjugate gradients: n on a fixed face;
+    measured: n)."""
+    h = 1e-4
+    ca, cb, cn, inv_m, q = _column_problem(n, h)
+    lam = np.full(n, 3.0 * n * M * G * h)
+    it = _mprgp(n, ca, cb, cn, inv_m, q, lam, SOLVE_TOL)
+    assert it <= 2 * n
+    np.testing.assert_allclose(lam, M * G * h * np.arange(n, 0, -1), rtol=0,
+                               atol=n * SOLVE_TOL * M)
+
+
+@pytest.mark.parametrize("n", [5, 20])
+def test_projected_conjugate_gradients_build_a_columns_weights_from_none(n):
+    """The column from no impulse: its contacts above the base, met until the base pushes,
+    join the free face one proportioning step at a time, so MPRGP takes about 4n iterations
+    (measured 15 and 77), within its limit (MPRGP_PER_CONTACT n) for short columns; longer
+    ones are finished by refine_normals' active-set rounds, which join them at once."""
+    h = 1e-4
+    ca, cb, cn, inv_m, q = _column_problem(n, h)
+    lam = np.zeros(n)
+    it = _mprgp(n, ca, cb, cn, inv_m, q, lam, SOLVE_TOL)
+    assert it < MPRGP_PER_CONTACT * n
+    np.testing.assert_allclose(lam, M * G * h * np.arange(n, 0, -1), rtol=0,
+                               atol=n * SOLVE_TOL * M)
+
+
+def test_projected_conjugate_gradients_release_a_contact_that_pulls():
+    """A sphere leaving a plate upwards at 1 mm/s beside a column of two resting on the same
+    plate, started from impulses on every contact: the leaving sphere's contact must end at
+    no impulse (it would pull), the column's carry its weights."""
+    h = 1e-4
+    ca = np.array([0, 1, 2], np.int64)
+    cb = np.array([-1, 0, -1], np.int64)
+    cn = np.tile([0.0, 0.0, 1.0], (3, 1))
+    q = np.array([-G * h, 0.0, 1e-3])
+    lam = np.full(3, M * G * h)
+    _mprgp(3, ca, cb, cn, np.full(3, 1.0 / M), q, lam, SOLVE_TOL)
+    np.testing.assert_allclose(lam, [2 * M * G * h, M * G * h, 0.0], rtol=0, atol=SOLVE_TOL * M)
