@@ -390,6 +390,16 @@ def _unpack(nc, x, scale, stride, ca, cb, cn, crb, mu, slip, mur, reff, rslip, i
     start(nc, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation)
 
 
+@njit(inline="always")
+def _bodies(nc, ca, cb):
+    """How many bodies the first nc contacts join (one more than the largest body index): the
+    caller's arrays may hold many more rows (the scratch of the largest cluster)."""
+    nbody = 0
+    for k in range(nc):
+        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    return nbody
+
+
 @njit
 def _free(nc, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, v0, w0):
     """The velocities of the contacts' bodies (the first ``v0.shape[0]``) without the contacts'
@@ -474,9 +484,7 @@ def _accelerated(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, i
     gram = np.empty((memory, memory))
     # the contacts' bodies only: the caller's arrays may hold many more rows (the scratch of
     # the largest cluster), which the acceleration's every combination would otherwise copy
-    nbody = 0
-    for k in range(nc):
-        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    nbody = _bodies(nc, ca, cb)
     v0, w0 = np.empty((nbody, 3)), np.empty((nbody, 3))
     _free(nc, ca, cb, cn, crb, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, v0, w0)
     _pack(nc, pn, pt, hr, scale, stride, x)
@@ -663,6 +671,28 @@ def _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, y):
 
 
 @njit(inline="always")
+def _scaled_gradient(nc, ca, cb, cn, inv_m, s, q, x, dv, g):
+    """g = S W S x + S q: the gradient of the Jacobi-scaled normal problem at x (computed
+    afresh, :func:`_mprgp`)."""
+    _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, g)
+    for k in range(nc):
+        g[k] += q[k] * s[k]
+
+
+@njit(inline="always")
+def _curvature(nc, ca, cb, cn, inv_m, s, d, g, dv, wd):
+    """For a direction d of the scaled problem: W d (into ``wd``), dᵀWd and gᵀd, which give the
+    step along d that minimises the quadratic (:func:`_mprgp`)."""
+    _scaled_product(nc, ca, cb, cn, inv_m, s, d, dv, wd)
+    dwd = 0.0
+    gd = 0.0
+    for k in range(nc):
+        dwd += d[k] * wd[k]
+        gd += g[k] * d[k]
+    return dwd, gd
+
+
+@njit(inline="always")
 def _free_gradient(nc, x, g, p):
     """The gradient's part on the contacts that carry an impulse (MPRGP's free gradient φ)."""
     for k in range(nc):
@@ -687,9 +717,7 @@ def _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol):
     Gauss–Seidel converges as the condition number itself. Stops where the natural residual
     (:func:`_natural_residual`) is within ``tol`` [m/s] or after MPRGP_PER_CONTACT iterations
     per contact (a problem with no solution, whose minimum is −∞). Returns the iterations."""
-    nbody = 0
-    for k in range(nc):
-        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    nbody = _bodies(nc, ca, cb)
     s = np.zeros(nc)  # λ = s x
     rows = np.zeros(nbody)  # per body: Σ s over its contacts (Gershgorin's bound)
     for k in range(nc):
@@ -711,9 +739,7 @@ def _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol):
     dv = np.empty((nbody, 3))
     for k in range(nc):
         x[k] = lam[k] / s[k] if s[k] > 0.0 else 0.0
-    _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, g)
-    for k in range(nc):
-        g[k] += q[k] * s[k]
+    _scaled_gradient(nc, ca, cb, cn, inv_m, s, q, x, dv, g)
     _free_gradient(nc, x, g, p)
     most = max(MPRGP_MIN, MPRGP_PER_CONTACT * nc)
     it = 0
@@ -733,9 +759,7 @@ def _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol):
                 chopped += g[k] * g[k]
         if res <= tol and not exact:
             # confirm on the gradient computed afresh (the recurrence drifts by rounding)
-            _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, g)
-            for k in range(nc):
-                g[k] += q[k] * s[k]
+            _scaled_gradient(nc, ca, cb, cn, inv_m, s, q, x, dv, g)
             _free_gradient(nc, x, g, p)
             exact = True
             continue
@@ -744,12 +768,7 @@ def _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol):
         it += 1
         exact = False
         if chopped <= MPRGP_GAMMA * MPRGP_GAMMA * reduced:
-            _scaled_product(nc, ca, cb, cn, inv_m, s, p, dv, wp)
-            pwp = 0.0
-            gp = 0.0
-            for k in range(nc):
-                pwp += p[k] * wp[k]
-                gp += g[k] * p[k]
+            pwp, gp = _curvature(nc, ca, cb, cn, inv_m, s, p, g, dv, wp)
             if not pwp > 0.0:
                 _free_gradient(nc, x, g, p)
                 break
@@ -775,20 +794,13 @@ def _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol):
                     g[k] -= feasible * wp[k]
                 for k in range(nc):
                     x[k] = max(x[k] - step * g[k], 0.0) if x[k] > 0.0 else 0.0
-                _scaled_product(nc, ca, cb, cn, inv_m, s, x, dv, g)
-                for k in range(nc):
-                    g[k] += q[k] * s[k]
+                _scaled_gradient(nc, ca, cb, cn, inv_m, s, q, x, dv, g)
                 _free_gradient(nc, x, g, p)
                 exact = True
         else:  # proportioning: release the contacts at 0 that pull
             for k in range(nc):
                 d[k] = min(g[k], 0.0) if x[k] <= 0.0 else 0.0
-            _scaled_product(nc, ca, cb, cn, inv_m, s, d, dv, wp)
-            dwd = 0.0
-            gd = 0.0
-            for k in range(nc):
-                dwd += d[k] * wp[k]
-                gd += g[k] * d[k]
+            dwd, gd = _curvature(nc, ca, cb, cn, inv_m, s, d, g, dv, wp)
             if not dwd > 0.0:
                 break
             a = gd / dwd
@@ -841,9 +853,7 @@ def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
     contact's shortfall and, where it carries an impulse, its excess (complementarity); it stops
     where that is within ``tol``. ``v`` and ``pn`` are updated where the residual ends below where
     it began. Returns the largest shortfall of a normal velocity afterwards."""
-    nbody = 0
-    for k in range(nc):
-        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    nbody = _bodies(nc, ca, cb)
     # the velocities without the normal impulses, and q
     v0 = np.empty((nbody, 3))
     for i in range(nbody):
@@ -941,9 +951,7 @@ def _delassus(kp, kr, ca, cb, cn, inv_m):
 @njit(allocates=True)
 def _normal_gradient(nc, ca, cb, cn, inv_m, lam, q):
     """W λ + q: each contact's normal velocity with the normal impulses λ, less its target."""
-    nbody = 0
-    for k in range(nc):
-        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    nbody = _bodies(nc, ca, cb)
     dv = np.zeros((nbody, 3))
     for k in range(nc):
         a, b = ca[k], cb[k]
@@ -1049,9 +1057,7 @@ def _polish(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m,
             ratio[k] = m / pn[k]
             for j in range(3):
                 along[k, j] = -pt[k, j] / m
-    nbody = 0
-    for k in range(nc):
-        nbody = max(nbody, ca[k] + 1, cb[k] + 1)
+    nbody = _bodies(nc, ca, cb)
     v0, w0 = v[:nbody].copy(), w[:nbody].copy()
     pn0, pt0 = pn[:nc].copy(), pt[:nc].copy()
     sweeps, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, ratio, along, mur, reff,
