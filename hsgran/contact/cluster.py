@@ -839,6 +839,20 @@ def _natural_residual(nc, lam, g):
 
 
 @njit(allocates=True)
+def _scored(nc, ca, cb, cn, inv_m, lam, q, best, best_lam, short):
+    """The gradient W λ + q at normal impulses ``lam`` and its natural residual
+    (:func:`_natural_residual`); ``lam`` is copied to ``best_lam`` where that residual is below
+    ``best``, with ``short``, its largest shortfall. Returns (gradient, residual, best,
+    short)."""
+    g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
+    res, worst = _natural_residual(nc, lam, g)
+    if res < best:
+        best_lam[:] = lam
+        return g, res, res, worst
+    return g, res, best, short
+
+
+@njit(allocates=True)
 def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
     """Finish a normal solve that Gauss–Seidel could not (the arguments as in :func:`solve`; the
     tangential impulses and rolling couples as they are, in ``v``): projected conjugate gradients
@@ -871,16 +885,10 @@ def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
     lam = pn[:nc].copy()
     g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
     begin, short = _natural_residual(nc, lam, g)
-    best = begin
     best_lam = lam.copy()
     _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol)
-    g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
-    res, worst = _natural_residual(nc, lam, g)
-    if res < best:
-        best = res
-        best_lam[:] = lam
-        short = worst
-    else:  # (no solution: the rounds start from where the finish began)
+    g, res, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, begin, best_lam, short)
+    if not best < begin:  # (no solution: the rounds start from where the finish began)
         lam[:] = best_lam
         g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
     active = np.zeros(nc, dtype=np.bool_)
@@ -911,12 +919,7 @@ def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
             lam[k] = 0.0
         for p in range(m):
             lam[idx[p]] = max(sol[p], 0.0)
-        g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
-        res, worst = _natural_residual(nc, lam, g)
-        if res < best:
-            best = res
-            best_lam[:] = lam
-            short = worst
+        g, res, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, best, best_lam, short)
         if res <= tol:
             break
     if best < begin:
