@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from hsgran._cluster import _count
-from hsgran._state import I_FROZEN, I_SIZE, I_STEP_SWEEPS, I_SWEEPS, I_VISITS
+from hsgran._state import I_FROZEN, I_SIZE, I_STEP_SWEEPS, I_SWEEPS, I_VISITS, WARM_EMPTY
 from hsgran.engine import Simulation
 from hsgran.onplane import MS_REST, MS_SLIDING
 from hsgran.scene import parse_scene
@@ -169,6 +169,26 @@ def test_stack_of_three_on_a_plate_stays_at_rest():
     sim.run()
     np.testing.assert_allclose(sim.pos, p0, atol=1e-12 * R)
     assert (sim.mstate == MS_REST).all()
+
+
+def test_an_impact_is_not_kept_as_a_force_for_the_next_steps_warm_start():
+    """A sphere dropped from 0.1 mm onto a stack of two resting on a plate (e = 0.5): the
+    steps that follow start warm from the forces kept per contact (hsgran._cluster._warm_load),
+    which must be forces that persist. Kept after the impact's step, the impact's impulse
+    over the step is a force of 24 times the weight of all three; a persisting contact force
+    carries at most the weight above it."""
+    body = (FLOOR + sphere(("0.0", "0.0", num(R))) + sphere(("0.0", "0.0", num(3 * R)))
+            + sphere(("0.0", "0.0", num(5 * R + 1e-4))))
+    sim = Simulation(scene(body, duration=0.05, e=0.5))
+    weight = 3 * G / sim.inv_m[0]
+    largest = 0.0
+    while sim.time < 0.05:
+        sim.run(max_collisions=1)
+        kept = np.linalg.norm(sim.wm_f[:3, :, :3], axis=2)
+        kept[sim.wm_q[:3] == WARM_EMPTY] = 0.0
+        largest = max(largest, kept.max())
+    assert sim.solver_counts()["solver_sweeps"] > 0  # the impact was a cluster's step
+    assert largest <= weight
 
 
 @pytest.mark.parametrize("e", [0.0, 0.5, 1.0])

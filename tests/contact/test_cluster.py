@@ -406,6 +406,38 @@ def test_anderson_acceleration_finds_a_columns_forces_in_far_fewer_sweeps(n):
     assert fast.sweeps < plain.sweeps / 8
 
 
+def test_acceleration_does_not_wedge_a_sphere_with_forces_its_motion_does_not_ask():
+    """A sphere (aluminium, r = 1.71 mm) sliding along the groove between a wall and a resting
+    sphere whose normals are 162° apart, μ = 0.62, μ_r = 0.02, warm from its last step's
+    forces (corpus scene 0-17 at 0.3472 s, to six digits). Friction tilts both contact forces
+    by up to 32°, so a pair of opposite forces along the line of the two contacts, of any size,
+    meets both contacts: Gauss–Seidel drifts along them at a constant rate, and the secant of
+    Anderson's combination ran off along that family, multiplying the impulses by 10⁴ (which
+    the next steps' warm starts carried into the bed). The solve keeps them at the weight's
+    scale, still meeting both contacts."""
+    nc = 2
+    cn = np.array([[1.0, 0.0, 0.0], [-0.950646, 0.0267682, 0.309122]])
+    inv_m = np.array([17789.2])
+    inv_i = np.array([1.52699e10])
+    rad = np.array([0.00170659])
+    v = np.array([[0.0, -2.96231e-4, 2.56470e-5]])
+    w = np.array([[1.09535, -0.0150293, -0.173566]])
+    pn = np.array([6.13539e-8, 7.00928e-8])
+    pt = np.array([[0.0, -4.49065e-10, 1.71182e-8], [5.27954e-9, -1.04099e-9, 1.63264e-8]])
+    hr = np.array([[0.0, 1.79299e-13, 2.06989e-12], [-3.68235e-13, -9.73647e-14, -1.12400e-12]])
+    zeros = np.zeros((nc, 3))
+    sweeps, worst, _ = solve(nc, np.zeros(nc, np.int64), np.full(nc, -1, np.int64), cn,
+                             np.array([0.0, 0.00170659]), zeros, np.array([0.0, -2.77625e-9]),
+                             np.full(nc, 0.624656), zeros.copy(), np.full(nc, 0.0198426),
+                             np.array([0.00170659, 0.00085330]), zeros.copy(), inv_m, inv_i,
+                             rad, v, w, pn, pt, hr, True, True, True, 1e-12, FRICTION_SWEEPS,
+                             True)
+    assert sweeps > ANDERSON_AFTER  # the acceleration had its turn
+    assert worst <= 1e-12
+    weight = G / inv_m[0] * 1e-4  # the sphere's weight over the step [N s]
+    assert pn.max() < 10 * weight
+
+
 def test_a_small_cluster_is_solved_as_before_the_acceleration():
     """A solve that converges within ANDERSON_AFTER sweeps never starts the acceleration: the
     results are those of plain Gauss–Seidel, bit for bit (a sphere sliding on a plate into a
