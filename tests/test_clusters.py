@@ -191,6 +191,30 @@ def test_an_impact_is_not_kept_as_a_force_for_the_next_steps_warm_start():
     assert largest <= weight
 
 
+@pytest.mark.parametrize("approach", [3e-14, 1e-12])
+def test_a_sphere_left_approaching_a_wall_it_touches_is_not_met_again_at_once(approach):
+    """Two touching spheres fall side by side, one 1e-12 R from an upright wall (touching it,
+    to the prediction: within PLANE_TOUCHING_REL) and drifting into it at ``approach`` [m/s],
+    far above rounding. The wall contact is a cluster's (the sphere touches another body);
+    the step's solve lets the gap close within the step (u ≥ −g/h) and gives it no impulse.
+    Let fly, the sphere met the wall again at once, and the solve after gave it no impulse
+    again: a sphere of the 2000-sphere pour met its side wall a thousand times at one instant
+    until the collapse guard stopped the run (``_cluster._flies_clear``). It moves on in
+    constrained motion instead."""
+    v = ("-" + num(approach), "0.0", "0.0")
+    x = R * (1.0 + 1e-12)
+    body = (plane(("0.0", "0.0", "0.0"), ("1.0", "0.0", "0.0"))
+            + sphere((num(x), "0.0", "0.05"), v) + sphere((num(x + 2 * R), "0.0", "0.05"), v))
+    sim = Simulation(scene(body, duration=0.02, mu=0.0))
+    sim.run()  # no SimulationError: the collapse guard is not reached
+    pos, _ = sim.state_at(sim.time)
+    assert sim.solver_counts()["solver_sweeps"] > 0  # the wall contact was a cluster's
+    assert pos[0, 0] - R >= -1e-9 * R  # the wall
+    assert np.linalg.norm(pos[1] - pos[0]) - 2 * R >= -1e-9 * 2 * R
+    # they fell freely: nothing held them up
+    np.testing.assert_allclose(pos[:, 2], 0.05 - 0.5 * G * 0.02 ** 2, atol=1e-9)
+
+
 @pytest.mark.parametrize("e", [0.0, 0.5, 1.0])
 def test_newtons_cradle_of_five_on_a_frictionless_plate(e):
     """Ball 0 slides at v into a row of four touching balls (0.1 mm away) on a frictionless
