@@ -15,6 +15,7 @@ from hsgran.contact.cluster import (
     MAX_SWEEPS,
     MPRGP_PER_CONTACT,
     STALL_SWEEPS,
+    _finish_frozen,
     _mprgp,
     refine_normals,
     solve,
@@ -54,10 +55,11 @@ class Cluster:
                           np.asarray(slip, float), mur, reff))
 
     def solve(self, rotation=True, friction=True, rolling=False, warm=None, friction_sweeps=None,
-              stall=False, max_sweeps=MAX_SWEEPS, memory=ANDERSON_MEMORY):
+              stall=False, max_sweeps=MAX_SWEEPS, memory=ANDERSON_MEMORY, polish_stall=False):
         """Solve cold, or warm from ``warm`` = (pn, pt, hr) applied by ``start`` first; with
         ``friction_sweeps``, by ``solve_polished`` with that many tangential sweeps (and
-        ``stall`` as its ``grow``); ``memory`` 0: plain Gauss–Seidel (``solve`` only)."""
+        ``stall`` as its ``grow``, ``polish_stall`` as its own: the engine's steps); ``memory``
+        0: plain Gauss–Seidel (``solve`` only)."""
         nc = len(self.rows)
         col = list(zip(*self.rows, strict=True))
         self.pn = np.zeros(nc)
@@ -79,7 +81,7 @@ class Cluster:
             self.frozen = False
         else:
             sweeps, worst, self.stalled, self.frozen = solve_polished(*args, friction_sweeps,
-                                                                      stall)
+                                                                      stall, polish_stall)
         self.sweeps = sweeps
         return worst
 
@@ -212,20 +214,52 @@ def _pyramid(mu=0.5, mur=0.01):
     return c
 
 
+@pytest.mark.parametrize("polish_stall", [False, True])
 @pytest.mark.parametrize("friction_sweeps", [1, 3, 10])
-def test_polished_solve_meets_the_normal_conditions_where_friction_is_cut_short(friction_sweeps):
+def test_polished_solve_meets_the_normal_conditions_where_friction_is_cut_short(
+        friction_sweeps, polish_stall):
     """solve_polished with the tangential sweeps cut short (as where a slipping mode converges
     slowly): the normal velocities still meet their targets to the tolerance and every
     impulse and rolling couple ends inside its cone, however short the cut; the solve says
-    that it froze them (what the engine counts as I_FROZEN)."""
+    that it froze them (what the engine counts as I_FROZEN). With ``polish_stall`` (the
+    engine's steps) the normals are finished directly with friction frozen and the cones
+    clipped between rounds (``_finish_frozen``), in place of the proportional polish's sweeps:
+    each round's finish may leave a cone exceeded by what it changed its normal impulse, a
+    rounding-level part of the impulses here."""
     c = _pyramid()
-    worst = c.solve(rolling=True, friction_sweeps=friction_sweeps)
+    worst = c.solve(rolling=True, friction_sweeps=friction_sweeps, polish_stall=polish_stall)
     assert c.frozen
     assert worst <= SOLVE_TOL
+    if polish_stall:
+        assert c.sweeps == friction_sweeps  # no polish sweeps: finished directly
     cones = np.linalg.norm(c.pt, axis=1) - 0.5 * c.pn
     assert cones.max() <= 1e-15 * c.pn.max()
     reff = np.array([row[9] for row in c.rows])
     assert (np.linalg.norm(c.hr, axis=1) - 0.01 * reff * c.pn).max() <= 1e-15 * c.pn.max() * R
+
+
+def test_a_direct_finish_that_cannot_meet_the_normals_leaves_the_impulses_as_they_were():
+    """A sphere pressed head-on against a fixed wall by a boundary that moves into it: with
+    friction frozen, no normal impulses meet both contacts, so the direct finish
+    (``_finish_frozen``) falls short of the tolerance, says so, and puts the velocities and
+    impulses back bit for bit, for the proportional polish to start from where the friction
+    sweeps ended (a normal impulse it took towards zero under an unclipped tangential one gave
+    that polish a ratio |P_t|/P_n far outside the cone: corpus scene 0-6 ran off to 1e300)."""
+    c = _pressed_into_a_wall(0.0, 0.5)
+    c.v[0] = (0.02, 0.0, 0.0)  # sliding along the wall too: friction carries impulses
+    c.solve(rotation=True, max_sweeps=50)
+    nc = len(c.rows)
+    col = list(zip(*c.rows, strict=True))
+    before = (c.v.copy(), c.w.copy(), c.pn.copy(), c.pt.copy(), c.hr.copy())
+    assert c.pn.min() > 0.0 and np.linalg.norm(c.pt, axis=1).min() > 0.0
+    worst = _finish_frozen(nc, np.array(col[0], np.int64), np.array(col[1], np.int64),
+                           np.array(col[2]), np.array(col[3], float), np.array(col[4]),
+                           np.array(col[5], float), np.array(col[6], float),
+                           np.array(col[8], float), np.array(col[9], float), c.inv_m, c.inv_i,
+                           c.rad, c.v, c.w, c.pn, c.pt, c.hr, True, True, False, SOLVE_TOL)
+    assert worst > 1e-3  # the boundary closes at 10 mm/s: nothing meets both contacts
+    for was, now in zip(before, (c.v, c.w, c.pn, c.pt, c.hr), strict=True):
+        np.testing.assert_array_equal(now, was)
 
 
 def test_polished_solve_that_converges_is_the_plain_solve():
