@@ -825,7 +825,8 @@ def _add_compile_parser(sub) -> None:
         description="Compile the versions of the compiled event loop (with and without "
                     "gravity, each for ordinary and for large systems) into numba's on-disk "
                     "cache, side by side in separate processes. Otherwise the first run that "
-                    "needs a version compiles it, which takes one to two minutes. The cache "
+                    "needs a version compiles it: 3 min without gravity, 14 min with it, on 2 "
+                    "cores (2026-12-03). The cache "
                     "is kept per version of hsgran's sources (under ~/.cache/hsgran, or "
                     "NUMBA_CACHE_DIR).")
     p.add_argument("versions", nargs="*", metavar="VERSION",

@@ -2,9 +2,10 @@
 
 The event loop is one large compiled function with four versions: with and without gravity
 (straight or parabolic flights), each in the layout for ordinary and for large systems
-(:data:`hsgran.engine.LARGE_FROM`). A cold compile of one version takes one to two minutes;
-numba keeps the result on disk (:mod:`hsgran._jit`), so it is paid once per installed version
-of hsgran, by the first run that needs it. ``hsgran compile`` pays it up front instead, with the
+(:data:`hsgran.engine.LARGE_FROM`). A cold compile of one version takes 3 min without gravity
+and 14 min with it (2 cores, 2026-12-03); numba keeps the result on disk
+(:mod:`hsgran._jit`), so it is paid once per installed version of hsgran, by the first run that
+needs it. ``hsgran compile`` pays it up front instead, with the
 versions compiled side by side in separate processes; ``tools/setup.sh`` runs it. Each version
 is compiled by running a tiny scene for a few events: the same code path as a real run, so the
 cache entries are the ones a real run looks up.
@@ -140,8 +141,9 @@ def main_report(names, jobs: int) -> int:
         print("nothing to compile: NUMBA_DISABLE_JIT is set")
         return 0
     todo = list(VERSIONS) if names is None else list(names)
-    print(f"compiling the event loop ({', '.join(todo)}) with {jobs} job(s): one to two "
-          f"minutes per version not yet in the cache", flush=True)
+    print(f"compiling the event loop ({', '.join(todo)}) with {jobs} job(s): minutes per "
+          f"version not yet in the cache (14 min with gravity on 2 cores), seconds for one "
+          f"that is", flush=True)
     t0 = time.perf_counter()
     done = compile_all(todo, jobs, report=lambda line: print(line, flush=True))
     print(f"compiled {len(done)} version(s) of the event loop in "

@@ -1115,11 +1115,24 @@ def _child_main(path: str) -> int:
 
 # ---- running a corpus ----------------------------------------------------------------------------
 
+#: Each scene's process runs its linear algebra on one thread (the dense finish of the cluster
+#: solves, np.linalg.lstsq in hsgran.contact.cluster.refine_normals, goes to OpenBLAS): the
+#: corpus runs ``--jobs`` scenes at once, one per core, and OpenBLAS's own threads made each
+#: scene's process take two cores where the finish ran (corpus 0-79 on 2 cores, 2026-12-03:
+#: 49 s of CPU in 26.6 s of wall where one thread takes 20.4 s in 20.6 s), so that CPU times
+#: counted the waiting and scenes run side by side slowed each other. (The thread count also
+#: changes the last bits of the least-squares solutions, and so the trajectory.) A value the
+#: caller's environment sets is kept.
+CHILD_THREADS = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+
+
 def run_child(spec: SceneSpec, path: Path, timeout: float) -> dict:
     """Run one scene (already written to ``path``) in a process of its own, killed after
     ``timeout`` seconds [s] of wall time; returns the report row."""
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
+    for name, value in CHILD_THREADS.items():
+        env.setdefault(name, value)
     t0 = time.perf_counter()
     proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--run-scene",
                              str(path)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
@@ -1193,10 +1206,13 @@ def run_corpus(specs: list[SceneSpec], *, jobs: int = DEFAULT_JOBS,
                report=print) -> list[dict]:
     """Run scenes ``jobs`` at a time, each in its own process; rows in the order of ``specs``.
     ``report(line)`` is called as each scene ends. The loops with gravity are compiled first
-    (seconds when the on-disk cache has them), so that no scene's timeout is spent compiling."""
+    (seconds when the on-disk cache has them; tens of minutes on 2 cores when it has not,
+    reported as ``# compiled ...`` lines), so that no scene's timeout is spent compiling."""
     if not jit_disabled():
-        compile_all([name for name in VERSIONS if name.startswith("gravity")], jobs=jobs,
-                    report=lambda line: None)
+        names = [name for name in VERSIONS if name.startswith("gravity")]
+        report(f"# compiling the {len(names)} versions of the event loop with gravity "
+               "(seconds when cached)")
+        compile_all(names, jobs=jobs, report=lambda line: report(f"# compiled {line}"))
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(scene_dir or tmp)
         folder.mkdir(parents=True, exist_ok=True)

@@ -637,6 +637,16 @@ def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, i
 #: those whose impulse came out negative; on a jammed bed's stalled step (corpus 0-17, 137
 #: contacts, 97 of them carrying) the second round met every contact to 2e-12 m/s.
 REFINE_ROUNDS = 8
+#: The active-set rounds of :func:`refine_normals` stop after this many rounds in a row that
+#: leave the best residual where it was [-]. A round drops the negative impulses of its least
+#: squares solution rather than stepping back to where they reach zero (Lawson & Hanson's
+#: NNLS does), so a round that loses ground gives the next one no better start. In the two
+#: finishes of corpus 0-79's wedge (109 spheres, 307 contacts, t = 0.114 s, 2026-12-03) whose
+#: rounds ran out, none of the 16 rounds came within 10³ of the residual that projected
+#: conjugate gradients had left (3e-5 to 6e-3 m/s against 5e-11 and 9e-9), and their dense
+#: solves of ~240 contacts, 8-11 ms each, were 70 of each finish's 100 ms
+#: (tests/contact/data/stalled_wedge_step.npz is the first).
+REFINE_PATIENCE = 2
 #: Largest set of contacts the finish solves directly [-]: its dense least-squares problem
 #: costs the cube of their number (1,500: about a second), so a larger stalled solve keeps
 #: what the sweeps reached.
@@ -870,45 +880,16 @@ def _scored(nc, ca, cb, cn, inv_m, lam, q, best, best_lam, short):
 
 
 @njit(allocates=True)
-def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
-    """Finish a normal solve that Gauss–Seidel could not (the arguments as in :func:`solve`; the
-    tangential impulses and rolling couples as they are, in ``v``): projected conjugate gradients
-    (:func:`_mprgp`), and where those do not meet ``tol``, an active-set method on the contacts'
-    normal impulses alone. Gauss–Seidel converges slowly where a bed's contacts are redundant (a row
-    of spheres jammed between two walls): its Delassus matrix W then has near-zero eigenvalues, and
-    the sweeps stall some 1e-8 m/s short of the targets. Each round of the active-set method solves
-    W_AA P_A = −q_A (least squares, the smallest impulses) for the set A of the contacts that carry
-    an impulse or do not exceed their target by more than ``tol`` (violated or just met: a column's
-    contacts above its base, met before the base pushes, join in the same round), q the normal
-    velocities without the normal impulses less the targets, and keeps P ≥ 0. Its residual is each
-    contact's shortfall and, where it carries an impulse, its excess (complementarity); it stops
-    where that is within ``tol``. ``v`` and ``pn`` are updated where the residual ends below where
-    it began. Returns the largest shortfall of a normal velocity afterwards."""
-    nbody = _bodies(nc, ca, cb)
-    # the velocities without the normal impulses, and q
-    v0 = np.empty((nbody, 3))
-    for i in range(nbody):
-        for j in range(3):
-            v0[i, j] = v[i, j]
-    _push_normals(nc, ca, cb, cn, inv_m, pn, v0, -1.0)
-    q = np.empty(nc)
-    for k in range(nc):
-        a, b = ca[k], cb[k]
-        u = 0.0
-        for j in range(3):
-            vb = v0[b, j] if b >= 0 else cvb[k, j]
-            u += (v0[a, j] - vb) * cn[k, j]
-        q[k] = u - target[k]
-    lam = pn[:nc].copy()
-    g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
-    begin, short = _natural_residual(nc, lam, g)
-    best_lam = lam.copy()
-    _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol)
-    g, res, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, begin, best_lam, short)
-    if not best < begin:  # (no solution: the rounds start from where the finish began)
-        lam[:] = best_lam
-        g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
+def _active_set(nc, ca, cb, cn, inv_m, q, lam, g, best, best_lam, short, tol):
+    """The active-set rounds of :func:`refine_normals` from normal impulses ``lam`` (changed)
+    with gradient ``g``: each solves the equations of the contacts that carry or are violated
+    (dense least squares) and drops the negative impulses, until one meets ``tol``, for at
+    most REFINE_ROUNDS rounds, and no more than REFINE_PATIENCE in a row that leave the best
+    residual ``best`` where it was. The best impulses go to ``best_lam`` (:func:`_scored`).
+    Returns (best residual, its largest shortfall, rounds taken)."""
     active = np.zeros(nc, dtype=np.bool_)
+    rounds = 0
+    stale = 0
     for _ in range(REFINE_ROUNDS if best > tol else 0):
         m = 0
         for k in range(nc):
@@ -936,9 +917,66 @@ def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
             lam[k] = 0.0
         for p in range(m):
             lam[idx[p]] = max(sol[p], 0.0)
+        before = best
         g, res, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, best, best_lam, short)
+        rounds += 1
         if res <= tol:
             break
+        stale = 0 if best < before else stale + 1
+        if stale >= REFINE_PATIENCE:
+            break
+    return best, short, rounds
+
+
+@njit(allocates=True)
+def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
+    """:func:`refined`'s largest shortfall of a normal velocity afterwards [m/s]."""
+    return refined(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol)[0]
+
+
+@njit(allocates=True)
+def refined(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
+    """Finish a normal solve that Gauss–Seidel could not (the arguments as in :func:`solve`; the
+    tangential impulses and rolling couples as they are, in ``v``): projected conjugate gradients
+    (:func:`_mprgp`), and where those do not meet ``tol``, an active-set method on the contacts'
+    normal impulses alone. Gauss–Seidel converges slowly where a bed's contacts are redundant (a row
+    of spheres jammed between two walls): its Delassus matrix W then has near-zero eigenvalues, and
+    the sweeps stall some 1e-8 m/s short of the targets. Each round of the active-set method solves
+    W_AA P_A = −q_A (least squares, the smallest impulses) for the set A of the contacts that carry
+    an impulse or do not exceed their target by more than ``tol`` (violated or just met: a column's
+    contacts above its base, met before the base pushes, join in the same round), q the normal
+    velocities without the normal impulses less the targets, and keeps P ≥ 0. Its residual is each
+    contact's shortfall and, where it carries an impulse, its excess (complementarity); it stops
+    where that is within ``tol``, or after REFINE_PATIENCE rounds in a row that do not lower the
+    best residual. ``v`` and ``pn`` are updated where the residual ends below where it began.
+    Returns the largest shortfall of a normal velocity afterwards [m/s] and the active-set
+    rounds taken (:func:`_active_set`)."""
+    nbody = _bodies(nc, ca, cb)
+    # the velocities without the normal impulses, and q
+    v0 = np.empty((nbody, 3))
+    for i in range(nbody):
+        for j in range(3):
+            v0[i, j] = v[i, j]
+    _push_normals(nc, ca, cb, cn, inv_m, pn, v0, -1.0)
+    q = np.empty(nc)
+    for k in range(nc):
+        a, b = ca[k], cb[k]
+        u = 0.0
+        for j in range(3):
+            vb = v0[b, j] if b >= 0 else cvb[k, j]
+            u += (v0[a, j] - vb) * cn[k, j]
+        q[k] = u - target[k]
+    lam = pn[:nc].copy()
+    g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
+    begin, short = _natural_residual(nc, lam, g)
+    best_lam = lam.copy()
+    _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol)
+    g, _, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, begin, best_lam, short)
+    if not best < begin:  # (no solution: the rounds start from where the finish began)
+        lam[:] = best_lam
+        g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
+    best, short, rounds = _active_set(nc, ca, cb, cn, inv_m, q, lam, g, best, best_lam, short,
+                                      tol)
     if best < begin:
         for k in range(nc):
             pn[k] = best_lam[k]
@@ -946,7 +984,7 @@ def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
             for j in range(3):
                 v[i, j] = v0[i, j]
         _push_normals(nc, ca, cb, cn, inv_m, pn, v, 1.0)
-    return short
+    return short, rounds
 
 
 @njit(inline="always")
