@@ -1116,13 +1116,14 @@ def _child_main(path: str) -> int:
 # ---- running a corpus ----------------------------------------------------------------------------
 
 #: Each scene's process runs its linear algebra on one thread (the dense finish of the cluster
-#: solves, np.linalg.lstsq in hsgran.contact.cluster.refine_normals, goes to OpenBLAS): the
-#: corpus runs ``--jobs`` scenes at once, one per core, and OpenBLAS's own threads made each
-#: scene's process take two cores where the finish ran (corpus 0-79 on 2 cores, 2026-12-03:
-#: 49 s of CPU in 26.6 s of wall where one thread takes 20.4 s in 20.6 s), so that CPU times
-#: counted the waiting and scenes run side by side slowed each other. (The thread count also
-#: changes the last bits of the least-squares solutions, and so the trajectory.) A value the
-#: caller's environment sets is kept.
+#: solves, hsgran.contact.cluster.refine_normals, calls OpenBLAS: np.linalg.lstsq until
+#: 2026-12-04, the products of its NNLS's QR updates since): the corpus runs ``--jobs``
+#: scenes at once, one per core, and OpenBLAS's own threads made each scene's process take two
+#: cores where the finish ran (corpus 0-79 on 2 cores, 2026-12-03: 49 s of CPU in 26.6 s of
+#: wall where one thread takes 20.4 s in 20.6 s), so that CPU times counted the waiting and
+#: scenes run side by side slowed each other. (The thread count can also change the last bits
+#: of the finish's solutions, and so the trajectory.) A value the caller's environment sets is
+#: kept.
 CHILD_THREADS = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 
 

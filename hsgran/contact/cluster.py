@@ -632,29 +632,27 @@ def solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m, i
     return sweeps, _worst(nc, ca, cb, cn, crb, cvb, target, rad, v, w, rotation), False
 
 
-#: At most this many rounds of the active-set finish of a normal solve (:func:`refine_normals`)
-#: [-]: each round solves the equations of the contacts that carry or are violated and drops
-#: those whose impulse came out negative; on a jammed bed's stalled step (corpus 0-17, 137
-#: contacts, 97 of them carrying) the second round met every contact to 2e-12 m/s.
-REFINE_ROUNDS = 8
-#: The active-set rounds of :func:`refine_normals` stop after this many rounds in a row that
-#: leave the best residual where it was [-]. A round drops the negative impulses of its least
-#: squares solution rather than stepping back to where they reach zero (Lawson & Hanson's
-#: NNLS does), so a round that loses ground gives the next one no better start. In the two
-#: finishes of corpus 0-79's wedge (109 spheres, 307 contacts, t = 0.114 s, 2026-12-03) whose
-#: rounds ran out, none of the 16 rounds came within 10³ of the residual that projected
-#: conjugate gradients had left (3e-5 to 6e-3 m/s against 5e-11 and 9e-9), and their dense
-#: solves of ~240 contacts, 8-11 ms each, were 70 of each finish's 100 ms
-#: (tests/contact/data/stalled_wedge_step.npz is the first).
-REFINE_PATIENCE = 2
-#: Largest set of contacts the finish solves directly [-]: its dense least-squares problem
-#: costs the cube of their number (1,500: about a second), so a larger stalled solve keeps
-#: what the sweeps reached.
+#: Lawson & Hanson's NNLS (:func:`_nnls`) takes at most this many steps per contact [-]
+#: (their limit, 3n; a step joins a contact to the set that carries, or lets one go): on the
+#: stalled wedge step of corpus 0-79 (307 contacts) it took 44 from the impulses the finish
+#: began with, 251 from none.
+NNLS_STEPS_PER_CONTACT = 3
+#: A contact joins the NNLS's set only where the part of its column orthogonal to the set's
+#: is above this fraction of the column's norm [-]; below, it depends on them as far as
+#: double precision tells (Gram–Schmidt leaves ~1e-16 of each column; the margin covers the
+#: growth of that with the set's size), and its least-squares problem would be singular. Such
+#: a contact stays out (and, if short, the finish is short by as much).
+NNLS_DEPENDENT_REL = 1e-12
+#: Gram–Schmidt orthogonalises a column against the set a second time where the first pass
+#: took away more than this fraction of its norm [-] (Kahan and Parlett's "twice is enough",
+#: in Parlett 1980, "The symmetric eigenvalue problem": after a second pass the column is
+#: orthogonal to working precision; where the first kept more than half, it is already).
+REORTHOGONALISE_BELOW = 0.5
+#: Largest set of contacts the finish solves directly [-]: its NNLS keeps a dense QR
+#: factorisation of (3 bodies + 1) rows by up to as many columns as contacts, which costs
+#: about their number squared times the bodies' (1,500: about a second), so a larger stalled
+#: solve keeps what the sweeps reached.
 REFINE_MAX = 1500
-#: Relative cut-off of the least-squares problem's singular values [-]: a bed's Delassus
-#: matrix has as many zero eigenvalues as the contacts are redundant, and the finish takes
-#: the least impulses among the many that meet the same contacts.
-REFINE_RCOND = 1e-13
 
 
 #: Iterations of the projected conjugate gradients that first try to finish a normal solve
@@ -879,53 +877,230 @@ def _scored(nc, ca, cb, cn, inv_m, lam, q, best, best_lam, short):
     return g, res, best, short
 
 
+@njit(inline="always")
+def _ldp_column(k, ca, cb, cn, root, h, e, rows):
+    """Column k of the NNLS matrix E = [G; hᵀ] of :func:`_nnls` into ``e`` (dense, 3 bodies + 1
+    rows; G's column k is contact k's normal at its bodies' rows, times their √(1/(m w₀)) in
+    ``root``, + at body a, − at body b, so that GᵀG is the scaled Delassus matrix); the rows it
+    fills go to ``rows``. Returns their number (7 between two bodies, 4 against an immovable
+    partner)."""
+    e[:] = 0.0
+    a, b = ca[k], cb[k]
+    count = 0
+    for j in range(3):
+        e[3 * a + j] = root[a] * cn[k, j]
+        rows[count] = 3 * a + j
+        count += 1
+    if b >= 0:
+        for j in range(3):
+            e[3 * b + j] = -root[b] * cn[k, j]
+            rows[count] = 3 * b + j
+            count += 1
+    last = e.shape[0] - 1
+    e[last] = h[k]
+    rows[count] = last
+    return count + 1
+
+
 @njit(allocates=True)
-def _active_set(nc, ca, cb, cn, inv_m, q, lam, g, best, best_lam, short, tol):
-    """The active-set rounds of :func:`refine_normals` from normal impulses ``lam`` (changed)
-    with gradient ``g``: each solves the equations of the contacts that carry or are violated
-    (dense least squares) and drops the negative impulses, until one meets ``tol``, for at
-    most REFINE_ROUNDS rounds, and no more than REFINE_PATIENCE in a row that leave the best
-    residual ``best`` where it was. The best impulses go to ``best_lam`` (:func:`_scored`).
-    Returns (best residual, its largest shortfall, rounds taken)."""
-    active = np.zeros(nc, dtype=np.bool_)
-    rounds = 0
-    stale = 0
-    for _ in range(REFINE_ROUNDS if best > tol else 0):
-        m = 0
+def _qr_join(m, qt, r, e, rows, count):
+    """Append column ``e`` (nonzero at its ``count`` ``rows``) to the QR factorisation of the
+    set's m columns (``qt``: Qᵀ, a row per column; ``r``: R) by classical Gram–Schmidt, with a
+    second pass where the first took more than REORTHOGONALISE_BELOW of it. Returns False, the
+    set's factors unchanged, where what is left is within NNLS_DEPENDENT_REL of its norm."""
+    norm0 = 0.0
+    for t in range(count):
+        norm0 += e[rows[t]] ** 2
+    norm0 = math.sqrt(norm0)
+    for p in range(m):  # the first pass: e is sparse
+        x = 0.0
+        for t in range(count):
+            x += qt[p, rows[t]] * e[rows[t]]
+        r[p, m] = x
+    if m > 0:
+        e -= np.dot(r[:m, m].copy(), qt[:m])
+    d = math.sqrt(np.dot(e, e))
+    if d < REORTHOGONALISE_BELOW * norm0 and m > 0:
+        x = np.dot(qt[:m], e)
+        e -= np.dot(x, qt[:m])
+        r[:m, m] += x
+        d = math.sqrt(np.dot(e, e))
+    if not d > NNLS_DEPENDENT_REL * norm0:
+        return False
+    qt[m] = e / d
+    r[m, m] = d
+    return True
+
+
+@njit(allocates=True)
+def _qr_drop(m, order, qt, r, p):
+    """Remove the set's column at position p from its QR factorisation (m columns; ``order``:
+    the contacts of the positions): R loses column p, and Givens rotations of R's rows (and of
+    Q's columns) take the subdiagonal that leaves (the deletion of a column from a QR
+    factorisation: Golub & Van Loan, "Matrix computations", on updating factorisations)."""
+    for c in range(p, m - 1):
+        order[c] = order[c + 1]
+        for i in range(c + 2):
+            r[i, c] = r[i, c + 1]
+    for i in range(p, m - 1):
+        a, b = r[i, i], r[i + 1, i]
+        rho = math.hypot(a, b)
+        c, s = a / rho, b / rho
+        for k in range(i, m - 1):
+            x, y = r[i, k], r[i + 1, k]
+            r[i, k] = c * x + s * y
+            r[i + 1, k] = -s * x + c * y
+        r[i + 1, i] = 0.0
+        upper = qt[i].copy()
+        qt[i] = c * upper + s * qt[i + 1]
+        qt[i + 1] = -s * upper + c * qt[i + 1]
+
+
+@njit(inline="always")
+def _qr_least_squares(m, qt, r, z):
+    """The least-squares solution z of E_P z ≈ f on the set's m columns, f the last unit vector
+    (so Qᵀf is Q's last row): back substitution in R."""
+    last = qt.shape[1] - 1
+    for p in range(m - 1, -1, -1):
+        z[p] = (qt[p, last] - np.dot(r[p, p + 1:m], z[p + 1:m])) / r[p, p]
+
+
+@njit(inline="always")
+def _ldp_impulses(nc, u, h, scale, w0, lam):
+    """The normal impulses [N s] of the NNLS solution u (:func:`_nnls`): λ = u / (1 − hᵀu) in the
+    scaled units, times scale / w₀; False (``lam`` as it was) where 1 − hᵀu ≤ 0: the NNLS
+    residual vanishes, and the problem has no solution."""
+    hu = 0.0
+    for k in range(nc):
+        hu += h[k] * u[k]
+    if not 1.0 - hu > 0.0:
+        return False
+    for k in range(nc):
+        lam[k] = u[k] / (1.0 - hu) * scale / w0
+    return True
+
+
+@njit(allocates=True)
+def _nnls(nc, ca, cb, cn, inv_m, q, lam, tol):
+    """The normal problem of :func:`_mprgp` (the same arguments; ``lam`` [N s] updated, from
+    where it is) by Lawson & Hanson's NNLS on its least-distance form (Lawson & Hanson 1974,
+    "Solving least squares problems", ch. 23, algorithms LDP and NNLS). The velocities that
+    meet every contact with the least change of kinetic energy are the solution (its
+    optimality conditions are the contacts' Signorini conditions); in y = √M Δv scaled by
+    √w₀ (w₀ the largest diagonal entry of W) they are the shortest y with Gᵀy ≥ h, where
+    GᵀG = W / w₀ and h = −q / max|q| (a least-distance problem). LDP solves that through the
+    non-negative least squares min ‖E u − f‖ over u ≥ 0, E = [G; hᵀ] (:func:`_ldp_column`)
+    and f the last unit vector: the impulses are u / (1 − hᵀu) in the scaled units
+    (:func:`_ldp_impulses`), and the NNLS gradient Eᵀ(f − E u) is −(1 − hᵀu) times the
+    contacts' scaled velocities less their targets. NNLS keeps a set of contacts that carry,
+    whose least-squares problem it solves on a QR factorisation of their columns updated as
+    contacts join and leave (:func:`_qr_join`, :func:`_qr_drop`): it joins the contact most
+    short, and where the least-squares solution would take an impulse below zero it steps back
+    to where the first one reaches zero, and that contact leaves the set. The solves are on
+    the QR factors of E, not on W's normal equations, so they hold where W is singular (a
+    bed's redundant contacts), to rounding of the set's conditioning, not of its square. Warm:
+    the set starts as the contacts that carry in ``lam``. Stops where no contact is short by
+    more than ``tol`` [m/s], or after NNLS_STEPS_PER_CONTACT steps per contact. Returns the
+    steps taken (−1: nothing to solve; −2: the problem has no solution)."""
+    nbody = _bodies(nc, ca, cb)
+    w0 = 0.0
+    scale = 0.0
+    for k in range(nc):
+        w0 = max(w0, _delassus(k, k, ca, cb, cn, inv_m))
+        scale = max(scale, abs(q[k]))
+    if not (scale > 0.0 and w0 > 0.0):
+        return -1
+    root = np.empty(nbody)
+    for i in range(nbody):
+        root[i] = math.sqrt(inv_m[i] / w0)
+    h = np.empty(nc)
+    hmu = 0.0
+    for k in range(nc):
+        h[k] = -q[k] / scale
+        hmu += h[k] * lam[k] * w0 / scale
+    u = np.zeros(nc)  # from λ: u = μ / (1 + hᵀμ), μ = λ w₀ / scale
+    if 1.0 + hmu > 0.0:
         for k in range(nc):
-            active[k] = lam[k] > 0.0 or g[k] <= tol
-            if active[k]:
+            u[k] = lam[k] * w0 / scale / (1.0 + hmu)
+    n = 3 * nbody + 1
+    room = min(n, nc)
+    qt = np.zeros((room, n))
+    r = np.zeros((room, room))
+    e = np.empty(n)
+    rows = np.empty(7, dtype=np.int64)
+    order = np.empty(room, dtype=np.int64)  # the contact at each position of the set
+    inset = np.zeros(nc, dtype=np.bool_)
+    barred = np.zeros(nc, dtype=np.bool_)  # dependent, or would carry nothing when joined
+    m = 0
+    for k in range(nc):
+        if u[k] > 0.0:
+            count = _ldp_column(k, ca, cb, cn, root, h, e, rows)
+            if m < room and _qr_join(m, qt, r, e, rows, count):
+                order[m] = k
+                inset[k] = True
                 m += 1
-        if m == 0 or m > REFINE_MAX:
-            break
-        idx = np.empty(m, dtype=np.int64)
-        m = 0
+            else:
+                u[k] = 0.0
+    z = np.empty(room)
+    steps = 0
+    solve = m > 0
+    limit = NNLS_STEPS_PER_CONTACT * nc
+    while steps < limit:
+        steps += 1
+        while solve:  # least squares on the set, stepping back where it leaves u ≥ 0
+            _qr_least_squares(m, qt, r, z)
+            alpha = math.inf
+            hit = -1
+            for p in range(m):
+                if z[p] <= 0.0:
+                    k = order[p]
+                    a = u[k] / (u[k] - z[p])
+                    if a < alpha:
+                        alpha = a
+                        hit = p
+            if hit < 0:
+                for p in range(m):
+                    u[order[p]] = z[p]
+                break
+            for p in range(m):
+                k = order[p]
+                u[k] += alpha * (z[p] - u[k])
+            u[order[hit]] = 0.0
+            for p in range(m - 1, -1, -1):
+                k = order[p]
+                if u[k] <= 0.0:
+                    u[k] = 0.0
+                    inset[k] = False
+                    _qr_drop(m, order, qt, r, p)
+                    m -= 1
+            steps += 1
+            if steps >= limit:
+                break
+        if not _ldp_impulses(nc, u, h, scale, w0, lam):
+            return -2
+        g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
+        join = -1
+        most = tol
         for k in range(nc):
-            if active[k]:
-                idx[m] = k
-                m += 1
-        w = np.zeros((m, m))
-        rhs = np.empty(m)
-        for p in range(m):
-            kp = idx[p]
-            rhs[p] = -q[kp]
-            for r in range(m):
-                kr = idx[r]
-                w[p, r] = _delassus(kp, kr, ca, cb, cn, inv_m)
-        sol = np.linalg.lstsq(w, rhs, REFINE_RCOND)[0]
-        for k in range(nc):
-            lam[k] = 0.0
-        for p in range(m):
-            lam[idx[p]] = max(sol[p], 0.0)
-        before = best
-        g, res, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, best, best_lam, short)
-        rounds += 1
-        if res <= tol:
+            if not inset[k] and not barred[k] and -g[k] > most:
+                most = -g[k]
+                join = k
+        if join < 0:
             break
-        stale = 0 if best < before else stale + 1
-        if stale >= REFINE_PATIENCE:
-            break
-    return best, short, rounds
+        count = _ldp_column(join, ca, cb, cn, root, h, e, rows)
+        solve = m < room and _qr_join(m, qt, r, e, rows, count)
+        if solve:
+            order[m] = join
+            _qr_least_squares(m + 1, qt, r, z)
+            solve = z[m] > 0.0  # (rounding: joined, it would carry nothing)
+        if solve:
+            inset[join] = True
+            m += 1
+        else:
+            barred[join] = True
+    if not _ldp_impulses(nc, u, h, scale, w0, lam):
+        return -2
+    return steps
 
 
 @njit(allocates=True)
@@ -938,19 +1113,17 @@ def refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
 def refined(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
     """Finish a normal solve that Gauss–Seidel could not (the arguments as in :func:`solve`; the
     tangential impulses and rolling couples as they are, in ``v``): projected conjugate gradients
-    (:func:`_mprgp`), and where those do not meet ``tol``, an active-set method on the contacts'
-    normal impulses alone. Gauss–Seidel converges slowly where a bed's contacts are redundant (a row
-    of spheres jammed between two walls): its Delassus matrix W then has near-zero eigenvalues, and
-    the sweeps stall some 1e-8 m/s short of the targets. Each round of the active-set method solves
-    W_AA P_A = −q_A (least squares, the smallest impulses) for the set A of the contacts that carry
-    an impulse or do not exceed their target by more than ``tol`` (violated or just met: a column's
-    contacts above its base, met before the base pushes, join in the same round), q the normal
-    velocities without the normal impulses less the targets, and keeps P ≥ 0. Its residual is each
-    contact's shortfall and, where it carries an impulse, its excess (complementarity); it stops
-    where that is within ``tol``, or after REFINE_PATIENCE rounds in a row that do not lower the
-    best residual. ``v`` and ``pn`` are updated where the residual ends below where it began.
-    Returns the largest shortfall of a normal velocity afterwards [m/s] and the active-set
-    rounds taken (:func:`_active_set`)."""
+    (:func:`_mprgp`), and where those do not meet ``tol``, Lawson & Hanson's NNLS (:func:`_nnls`)
+    from where they got to, on the contacts' normal impulses alone. Gauss–Seidel converges slowly
+    where a bed's contacts are redundant (a row of spheres jammed between two walls): its Delassus
+    matrix W then has zero eigenvalues, and the sweeps stall some 1e-8 m/s short of the targets;
+    conjugate gradients converge faster but can stall as well where many contacts are on the edge
+    of carrying (a wedge's bed). The residual is each contact's shortfall and, where it carries an
+    impulse, its excess (complementarity, :func:`_natural_residual`); the impulses with the least
+    residual are kept (:func:`_scored`). ``v`` and ``pn`` are updated where the residual ends below
+    where it began. Returns the largest shortfall of a normal velocity afterwards [m/s] and the
+    NNLS steps taken (0 where the conjugate gradients met ``tol``, or the set exceeds
+    REFINE_MAX)."""
     nbody = _bodies(nc, ca, cb)
     # the velocities without the normal impulses, and q
     v0 = np.empty((nbody, 3))
@@ -971,12 +1144,12 @@ def refined(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
     begin, short = _natural_residual(nc, lam, g)
     best_lam = lam.copy()
     _mprgp(nc, ca, cb, cn, inv_m, q, lam, tol)
-    g, _, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, begin, best_lam, short)
-    if not best < begin:  # (no solution: the rounds start from where the finish began)
-        lam[:] = best_lam
-        g = _normal_gradient(nc, ca, cb, cn, inv_m, lam, q)
-    best, short, rounds = _active_set(nc, ca, cb, cn, inv_m, q, lam, g, best, best_lam, short,
-                                      tol)
+    _, _, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, begin, best_lam, short)
+    steps = 0
+    if best > tol and nc <= REFINE_MAX:
+        lam[:] = best_lam  # (where the conjugate gradients found no better, from the start)
+        steps = _nnls(nc, ca, cb, cn, inv_m, q, lam, tol)
+        _, _, best, short = _scored(nc, ca, cb, cn, inv_m, lam, q, best, best_lam, short)
     if best < begin:
         for k in range(nc):
             pn[k] = best_lam[k]
@@ -984,7 +1157,7 @@ def refined(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol):
             for j in range(3):
                 v[i, j] = v0[i, j]
         _push_normals(nc, ca, cb, cn, inv_m, pn, v, 1.0)
-    return short, rounds
+    return short, steps
 
 
 @njit(inline="always")
