@@ -338,6 +338,50 @@ def test_dry_run_lists_and_writes_the_scenes(tmp_path, capsys):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["2-0.toml", "2-1.toml", "2-2.toml"]
 
 
+def _corpus_csv(path, rows):
+    """An earlier run's CSV (``--out``) with only the columns --rerun reads."""
+    rb.write_rows([dict(id=i, kind="box", n=n, outcome=o) for i, n, o in rows], path)
+    return path
+
+
+def test_rerun_draws_again_the_scenes_that_did_not_complete(tmp_path):
+    drawn = rb.corpus(1, 4, max_count=300)
+    csv_path = _corpus_csv(tmp_path / "run.csv", [
+        (spec.id, spec.n, outcome) for spec, outcome
+        in zip(drawn, ("completed", "timeout", "guard", "timeout"), strict=True)])
+    again = rb.rerun(csv_path, ("timeout", "guard"), max_count=300)
+    assert [spec.id for spec in again] == ["1-1", "1-2", "1-3"]
+    assert [spec.text for spec in again] == [spec.text for spec in drawn[1:]]
+    assert [spec.id for spec in rb.rerun(csv_path, ("guard",), max_count=300)] == ["1-2"]
+
+
+def test_rerun_refuses_a_scene_drawn_with_another_max_count(tmp_path):
+    spec = rb.draw_scene(0, 5, max_count=3000)
+    csv_path = _corpus_csv(tmp_path / "run.csv", [(spec.id, spec.n, "timeout")])
+    assert rb.draw_scene(0, 5, max_count=300).n != spec.n
+    with pytest.raises(ValueError, match=r"scene 0-5 .*--max-count"):
+        rb.rerun(csv_path, ("timeout",), max_count=300)
+    assert [s.text for s in rb.rerun(csv_path, ("timeout",), max_count=3000)] == [spec.text]
+
+
+def test_rerun_on_the_command_line(tmp_path, capsys):
+    drawn = rb.corpus(0, 3, max_count=300)
+    csv_path = _corpus_csv(tmp_path / "run.csv", [
+        (spec.id, spec.n, o) for spec, o in zip(drawn, ("timeout", "completed", "error"),
+                                                 strict=True)])
+    assert rb.main(["--rerun", str(csv_path), "--max-count", "300", "--outcome", "timeout",
+                    "--dry-run"]) == 0
+    assert [line.split()[0] for line in capsys.readouterr().out.splitlines()] == ["0-0"]
+    for argv in (["--outcome", "timeout"], ["--rerun", str(tmp_path / "none.csv")],
+                 ["--rerun", str(csv_path), "--sample"]):
+        with pytest.raises(SystemExit) as exc:
+            rb.main([*argv, "--dry-run"])
+        assert exc.value.code == 2
+    message = capsys.readouterr().err.splitlines()[-1]
+    assert "--rerun" in message
+    assert "--sample" in message
+
+
 @pytest.mark.slow
 def test_the_sample_runs_to_the_end():
     """Every scene of the sample completes (today's pairwise rules stop several at the collapse

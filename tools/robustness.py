@@ -6,6 +6,8 @@ Usage:
         [--max-count 3000] [--jobs 2] [--timeout 600] [--out FILE.csv|FILE.json]
         [--write-scenes DIR] [--dry-run]
     .venv/bin/python tools/robustness.py --sample [--jobs 2] [--out FILE]
+    .venv/bin/python tools/robustness.py --rerun FILE.csv [--outcome timeout] [--max-count M]
+        [--timeout 700] [--out FILE2.csv]
 
 It is the yardstick of the settling rules (docs/enduring-contact.md): today's pairwise rules
 are expected to fail on some scenes, and this tool measures how often and how, it does not make
@@ -508,6 +510,32 @@ def corpus(corpus_seed: int, count: int, *, first: int = 0,
            max_count: int = COUNT_RANGE[1]) -> list[SceneSpec]:
     """Scenes ``first`` … ``first + count − 1`` of a corpus."""
     return [draw_scene(corpus_seed, i, max_count=max_count) for i in range(first, first + count)]
+
+
+def rerun(path: Path, outcomes: tuple[str, ...], *, max_count: int) -> list[SceneSpec]:
+    """The scenes of an earlier run's CSV (``--out``) that ended with one of ``outcomes``,
+    drawn again (``--rerun``): to run what timed out with a larger ``--timeout``. Each is
+    drawn from its id with ``max_count``, which must be that run's ``--max-count``: a scene
+    whose N differs from the CSV's is refused (ValueError naming it), since it would be
+    another scene under the same id."""
+    with path.open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    if rows and not {"id", "n", "outcome"} <= set(rows[0]):
+        raise ValueError(f"--rerun {path}: not a corpus CSV (no id, n and outcome columns)")
+    specs = []
+    for row in rows:
+        if row["outcome"] not in outcomes:
+            continue
+        m = re.fullmatch(r"(\d+)-(\d+)", row["id"])
+        if not m:
+            raise ValueError(f"--rerun {path}: id {row['id']!r} is not a corpus scene (S-I)")
+        spec = draw_scene(int(m.group(1)), int(m.group(2)), max_count=max_count)
+        if str(spec.n) != row["n"]:
+            raise ValueError(f"--rerun {path}: scene {row['id']} has N = {spec.n} with "
+                             f"--max-count {max_count}, the CSV says {row['n']}: pass the "
+                             f"--max-count of that run")
+        specs.append(spec)
+    return specs
 
 
 def sample() -> list[SceneSpec]:
@@ -1319,14 +1347,32 @@ def main(argv=None) -> int:
     ap.add_argument("--dry-run", action="store_true", help="draw and list, do not run")
     ap.add_argument("--treatment", choices=TREATMENTS, default="pairwise",
                     help="[enduring_contact] treatment of every scene (docs/enduring-contact.md)")
+    ap.add_argument("--rerun", type=Path, metavar="CSV",
+                    help="the scenes of an earlier --out CSV that did not complete (see "
+                         "--outcome), drawn again with --max-count, instead of --first/--count")
+    ap.add_argument("--outcome", action="append", choices=OUTCOMES, metavar="OUTCOME",
+                    help="with --rerun: the outcomes to run again (repeatable; default every "
+                         f"one but completed; one of {', '.join(OUTCOMES)})")
     ap.add_argument("--run-scene", metavar="FILE", help=argparse.SUPPRESS)  # one child
     args = ap.parse_args(argv)
     if args.run_scene:
         return _child_main(args.run_scene)
     if args.count < 0 or args.jobs < 1 or args.timeout <= 0 or args.max_count < 1:
         ap.error("--count >= 0, --jobs >= 1, --timeout > 0 and --max-count >= 1")
-    specs = sample() if args.sample else corpus(args.corpus_seed, args.count, first=args.first,
-                                                max_count=args.max_count)
+    if args.outcome and not args.rerun:
+        ap.error("--outcome needs --rerun")
+    if args.rerun and args.sample:
+        ap.error("--rerun and --sample exclude each other")
+    if args.rerun:
+        wanted = tuple(args.outcome or [o for o in OUTCOMES if o != "completed"])
+        try:
+            specs = rerun(args.rerun, wanted, max_count=args.max_count)
+        except (OSError, ValueError, KeyError) as exc:
+            ap.error(str(exc) if isinstance(exc, ValueError) else f"--rerun {args.rerun}: {exc}")
+    elif args.sample:
+        specs = sample()
+    else:
+        specs = corpus(args.corpus_seed, args.count, first=args.first, max_count=args.max_count)
     if args.treatment != "pairwise":
         specs = [with_treatment(spec, args.treatment) for spec in specs]
     if args.dry_run:
