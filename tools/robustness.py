@@ -1367,7 +1367,7 @@ def main(argv=None) -> int:
         wanted = tuple(args.outcome or [o for o in OUTCOMES if o != "completed"])
         try:
             specs = rerun(args.rerun, wanted, max_count=args.max_count)
-        except (OSError, ValueError, KeyError) as exc:
+        except (OSError, ValueError) as exc:  # (the columns are checked in rerun)
             ap.error(str(exc) if isinstance(exc, ValueError) else f"--rerun {args.rerun}: {exc}")
     elif args.sample:
         specs = sample()
