@@ -5,12 +5,14 @@ corner, a stack of spheres on a plate, and Newton's cradle of five on a plate.""
 
 import math
 
+import numba
 import numpy as np
 import pytest
 
-from hsgran._cluster import _count
+from hsgran._cluster import HAND_OVER_RAPID, _count
 from hsgran._state import I_FROZEN, I_SIZE, I_STEP_SWEEPS, I_SWEEPS, I_VISITS, WARM_EMPTY
 from hsgran.engine import Simulation
+from hsgran.events.kinds import EV_CLUSTER
 from hsgran.onplane import MS_REST, MS_SLIDING
 from hsgran.scene import parse_scene
 from tests.scenes import FLOOR, num, plane, sphere
@@ -424,3 +426,48 @@ def test_the_run_summary_reports_the_cluster_solves_work():
     quiet = plain.run()
     assert quiet.solver_visits == 0
     assert not any(line.startswith("cluster solves") for line in quiet.lines())
+
+
+#: 40 spheres poured onto a floor tilted by 7° (gravity tilted in a box periodic along x and
+#: y): μ = 0.53 > tan 7°, no rolling friction, so no sphere can rest on the floor alone.
+BUZZING_BED = """
+[scene]
+name = "bed on a 7 degree chute"
+duration = {duration}
+gravity = [1.1955, 0.0, -9.7369]
+effects = ["gravity", "rotation", "friction"]
+seed = 7
+periodic = [true, true, false]
+[output]
+frame_interval = {duration}
+[[contacts]]
+between = ["steel", "steel"]
+restitution = 0.41
+sliding_friction = 0.53
+[[walls]]
+kind = "box"
+lower = [0.0, 0.0, 0.0]
+upper = [0.006, 0.006, 0.03]
+material = "steel"
+[[fill]]
+count = 40
+material = "steel"
+radius = 0.000675
+region = {{ lower = [0.0, 0.0, 0.004], upper = [0.006, 0.006, 0.03] }}
+"""
+
+
+@pytest.mark.skipif(numba.config.DISABLE_JIT,
+                    reason="too slow without the compiler: the streak is 2**17 collisions")
+def test_a_bed_that_nothing_holds_alone_is_handed_over_by_its_tc_streak_and_comes_to_rest():
+    """With the pairwise rules, the bed of BUZZING_BED jams, but none of its spheres can rest
+    alone on the tilted floor, so none can sleep on another: its collisions come within the
+    TC time of each other and stay elastic, and it buzzed for ever (2.4 million TC collisions
+    of one sphere in a row by 0.4 s). The streak hands it to the cluster solve
+    (hsgran._cluster.HAND_OVER_RAPID), whose friction holds it: every sphere at rest, and no
+    sphere left with a streak that long."""
+    sim = Simulation(parse_scene(BUZZING_BED.format(duration=0.6)))
+    sim.run()
+    assert (sim.mstate == MS_REST).all()
+    assert sim.counts[EV_CLUSTER] > 0
+    assert sim.rapid.max() < HAND_OVER_RAPID

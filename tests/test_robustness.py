@@ -4,6 +4,7 @@ measurements are right on hand-made cases; its classifier knows the collapse gua
 import math
 import re
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -390,3 +391,19 @@ def test_the_sample_runs_to_the_end():
     failed = [f"{r['id']}: {r['outcome']} {r['message']}" for r in rows
               if r["outcome"] != "completed"]
     assert not failed, "\n".join(failed)
+
+
+def test_the_corpus_compiles_the_loop_for_large_systems_only_for_a_large_scene(monkeypatch):
+    """run_corpus compiles the loop with gravity before the first scene, and its version for
+    large systems (LARGE_FROM spheres) only where a scene is that large: minutes of compile
+    that a corpus of smaller scenes never uses."""
+    compiled = []
+    monkeypatch.setattr(rb, "jit_disabled", lambda: False)
+    monkeypatch.setattr(rb, "compile_all", lambda names, **_: compiled.append(list(names)))
+    monkeypatch.setattr(rb, "run_child", lambda spec, path, timeout: {"id": spec.id})
+    monkeypatch.setattr(rb, "format_row", lambda row: row["id"])
+    small = rb.sample()[:2]
+    rb.run_corpus(small, jobs=1, report=lambda _: None)
+    rb.run_corpus([small[0], replace(small[1], n=rb.LARGE_FROM)], jobs=1,
+                  report=lambda _: None)
+    assert compiled == [["gravity"], ["gravity", "gravity-large"]]

@@ -116,6 +116,7 @@ from scipy.spatial import cKDTree
 
 from hsgran._state import SOLVER_COUNTS
 from hsgran.contact.viscous import dissipative_constant_for
+from hsgran.engine import LARGE_FROM
 from hsgran.events.kinds import EV_LAND, EV_PAIR, EV_WALL, EVENT_NAMES
 from hsgran.materials import (
     BUILTIN_MATERIALS,
@@ -124,7 +125,7 @@ from hsgran.materials import (
     solid_sphere_mass,
 )
 from hsgran.placement import Space, overlapping_pairs
-from hsgran.precompile import VERSIONS, compile_all, jit_disabled
+from hsgran.precompile import compile_all, jit_disabled
 from hsgran.scene import TREATMENTS
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -1236,10 +1237,12 @@ def run_corpus(specs: list[SceneSpec], *, jobs: int = DEFAULT_JOBS,
     """Run scenes ``jobs`` at a time, each in its own process; rows in the order of ``specs``.
     ``report(line)`` is called as each scene ends. The loops with gravity are compiled first
     (seconds when the on-disk cache has them; tens of minutes on 2 cores when it has not,
-    reported as ``# compiled ...`` lines), so that no scene's timeout is spent compiling."""
+    reported as ``# compiled ...`` lines), so that no scene's timeout is spent compiling;
+    the version for large systems only where a scene is one (LARGE_FROM spheres)."""
     if not jit_disabled():
-        names = [name for name in VERSIONS if name.startswith("gravity")]
-        report(f"# compiling the {len(names)} versions of the event loop with gravity "
+        names = ["gravity"] + (["gravity-large"] if specs and max(s.n for s in specs)
+                               >= LARGE_FROM else [])
+        report(f"# compiling the event loop with gravity: {', '.join(names)} "
                "(seconds when cached)")
         compile_all(names, jobs=jobs, report=lambda line: report(f"# compiled {line}"))
     with tempfile.TemporaryDirectory() as tmp:
