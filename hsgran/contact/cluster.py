@@ -1373,9 +1373,10 @@ def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
     may end outside its cone by what the finish's last round changed its normal impulse (the
     rounds end with a finish, not a clip: on six steps of corpus 0-64's bed of ~700 contacts,
     0 to 17 contacts beyond 1.001 μ P_n, at most 1.064 μ P_n and 3.5e-11 N s, the next step's
-    sweeps projecting them back; docs/enduring-contact.md, "Where a frozen step's time goes"). Returns (sweeps, worst, stalled) as :func:`solve`, and
-    whether the tangential impulses were frozen before they converged (friction and rolling
-    then hold only to the accuracy their sweeps reached)."""
+    sweeps projecting them back; docs/enduring-contact.md, "Where a frozen step's time
+    goes"). Returns (sweeps, worst, stalled) as :func:`solve`, and whether the tangential
+    impulses were frozen before they converged (friction and rolling then hold only to the
+    accuracy their sweeps reached)."""
     tangential = friction or rolling
     sweeps, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
                                    inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, friction,

@@ -258,7 +258,8 @@ def test_a_direct_finish_that_cannot_meet_the_normals_leaves_the_impulses_as_the
     nc = len(c.rows)
     col = list(zip(*c.rows, strict=True))
     before = (c.v.copy(), c.w.copy(), c.pn.copy(), c.pt.copy(), c.hr.copy())
-    assert c.pn.min() > 0.0 and np.linalg.norm(c.pt, axis=1).min() > 0.0
+    assert c.pn.min() > 0.0
+    assert np.linalg.norm(c.pt, axis=1).min() > 0.0
     worst = _finish_frozen(nc, np.array(col[0], np.int64), np.array(col[1], np.int64),
                            np.array(col[2]), np.array(col[3], float), np.array(col[4]),
                            np.array(col[5], float), np.array(col[6], float),
