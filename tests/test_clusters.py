@@ -462,7 +462,7 @@ region = {{ lower = [0.0, 0.0, 0.004], upper = [0.006, 0.006, 0.03] }}
 def test_a_bed_that_nothing_holds_alone_is_handed_over_by_its_tc_streak_and_comes_to_rest():
     """With the pairwise rules, the bed of BUZZING_BED jams, but none of its spheres can rest
     alone on the tilted floor, so none can sleep on another: its collisions come within the
-    TC time of each other and stay elastic, and it buzzed for ever (2.4 million TC collisions
+    TC time of each other and stay elastic, and it buzzed for ever (1.2 million TC collisions
     of one sphere in a row by 0.4 s). The streak hands it to the cluster solve
     (hsgran._cluster.HAND_OVER_RAPID), whose friction holds it: every sphere at rest, and no
     sphere left with a streak that long."""
