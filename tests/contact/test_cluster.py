@@ -13,6 +13,7 @@ import scipy.optimize
 from hsgran.contact.cluster import (
     ANDERSON_AFTER,
     ANDERSON_MEMORY,
+    DIRECT_AFTER,
     FRICTION_SWEEPS,
     MAX_SWEEPS,
     MPRGP_PER_CONTACT,
@@ -538,6 +539,50 @@ def _refine(c, pn=None, tol=SOLVE_TOL):
     worst = refine_normals(nc, ca, cb, cn, np.array(col[4]), np.array(col[5], float), c.inv_m,
                            c.v, pn, tol)
     return worst, pn
+
+
+def _frictionless_column(n, h=1e-4):
+    """n spheres stacked on a plate at the end of a step h without contacts (each at −g h),
+    frictionless: the normal problem of a step."""
+    c = Cluster(n)
+    c.v[:, 2] = -G * h
+    c.contact(0, -1, (0.0, 0.0, 1.0))
+    for k in range(1, n):
+        c.contact(k, k - 1, (0.0, 0.0, 1.0))
+    return c
+
+
+@pytest.mark.parametrize("n", [40, 80])
+def test_a_slow_frictionless_step_is_finished_directly_after_its_sweeps(n):
+    """A frictionless column of n spheres (a step's problem): the sweeps alone need more than
+    DIRECT_AFTER (its weight reaches the plate one contact per sweep); the engine's solve
+    (``polish_stall``) stops them there and finishes directly, with every contact met to the
+    tolerance and contact k carrying the n − k spheres above it."""
+    h = 1e-4
+    swept, direct = _frictionless_column(n, h), _frictionless_column(n, h)
+    assert swept.solve(rotation=False, friction=False) <= SOLVE_TOL
+    assert swept.sweeps > DIRECT_AFTER
+    worst = direct.solve(rotation=False, friction=False, friction_sweeps=FRICTION_SWEEPS,
+                         polish_stall=True)
+    assert worst <= SOLVE_TOL
+    assert direct.sweeps == DIRECT_AFTER
+    assert not direct.stalled
+    assert not direct.frozen
+    weight = M * G * h * np.arange(n, 0, -1)
+    np.testing.assert_allclose(direct.pn, weight, rtol=1e-9)
+    np.testing.assert_allclose(direct.v, 0.0, atol=n * SOLVE_TOL)
+
+
+def test_a_frictionless_step_the_sweeps_meet_is_not_finished_directly():
+    """Where the sweeps converge within DIRECT_AFTER (a short column), the engine's frictionless
+    solve is the plain solve, bit for bit."""
+    plain, step = _frictionless_column(5), _frictionless_column(5)
+    plain.solve(rotation=False, friction=False, stall=True)
+    step.solve(rotation=False, friction=False, friction_sweeps=FRICTION_SWEEPS,
+               polish_stall=True)
+    assert step.sweeps == plain.sweeps < DIRECT_AFTER
+    np.testing.assert_array_equal(step.pn, plain.pn)
+    np.testing.assert_array_equal(step.v, plain.v)
 
 
 @pytest.mark.parametrize("n", [1, 5, 20])
