@@ -1362,25 +1362,18 @@ DIRECT_AFTER = STALL_SWEEPS
 @njit(allocates=True)
 def _frictionless_direct(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip, inv_m,
                          inv_i, rad, v, w, pn, pt, hr, rotation, tol):
-    """:func:`solve_polished` of a frictionless cluster with ``polish_stall`` (the arguments as
-    in :func:`solve`): DIRECT_AFTER sweeps, then, where they have not met ``tol``, the direct
-    finish (:func:`refined`), and where that does not meet it either, the sweeps on to
-    MAX_SWEEPS, finished directly again where they stall. Returns :func:`solve_polished`'s
-    (sweeps, worst, stalled, frozen)."""
+    """The start of :func:`solve_polished` for a frictionless cluster with ``polish_stall``
+    (the arguments as in :func:`solve`): DIRECT_AFTER sweeps, then, where they have not met
+    ``tol``, the direct finish (:func:`refined`). Returns (sweeps, worst, met): where ``met``
+    is False the finish did not meet ``tol`` either, and the caller's sweeps go on from
+    there."""
     sweeps, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
                                    inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, False, False,
                                    tol, DIRECT_AFTER, True)
     if sweeps < DIRECT_AFTER and not stalled:
-        return sweeps, worst, False, False
+        return sweeps, worst, True
     worst = refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol)
-    if worst <= tol:
-        return sweeps, worst, False, False
-    more, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
-                                 inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, False, False, tol,
-                                 MAX_SWEEPS - sweeps, True)
-    if stalled and worst > tol:
-        worst = refine_normals(nc, ca, cb, cn, cvb, target, inv_m, v, pn, tol)
-    return sweeps + more, worst, stalled, False
+    return sweeps, worst, worst <= tol
 
 
 @njit(allocates=True)
@@ -1417,13 +1410,19 @@ def solve_polished(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
     impulses were frozen before they converged (friction and rolling then hold only to the
     accuracy their sweeps reached)."""
     tangential = friction or rolling
+    first = 0  # sweeps before the direct finish of a frictionless solve
     if not tangential and polish_stall and not grow:
-        return _frictionless_direct(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff,
-                                    rslip, inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, tol)
+        first, worst, met = _frictionless_direct(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur,
+                                                 reff, rslip, inv_m, inv_i, rad, v, w, pn, pt,
+                                                 hr, rotation, tol)
+        if met:
+            return first, worst, False, False
     sweeps, worst, stalled = solve(nc, ca, cb, cn, crb, cvb, target, mu, slip, mur, reff, rslip,
                                    inv_m, inv_i, rad, v, w, pn, pt, hr, rotation, friction,
-                                   rolling, tol, friction_sweeps if tangential else MAX_SWEEPS,
+                                   rolling, tol,
+                                   (friction_sweeps if tangential else MAX_SWEEPS) - first,
                                    tangential or grow or polish_stall)
+    sweeps += first
     if stalled and grow:
         return sweeps, worst, True, False
     if not tangential or (sweeps < friction_sweeps and not stalled):

@@ -592,11 +592,7 @@ def test_the_normal_refinement_gives_a_columns_weights_at_once(n):
     contact k the impulse of the n − k spheres above it, from no impulse and from a wrong one."""
     h = 1e-4
     for start_pn in (None, np.full(n, 3.0 * M * G * h)):
-        c = Cluster(n)
-        c.v[:, 2] = -G * h
-        c.contact(0, -1, (0.0, 0.0, 1.0))
-        for k in range(1, n):
-            c.contact(k, k - 1, (0.0, 0.0, 1.0))
+        c = _frictionless_column(n, h)
         worst, pn = _refine(c, start_pn)
         assert worst <= SOLVE_TOL
         np.testing.assert_allclose(pn, M * G * h * np.arange(n, 0, -1), rtol=1e-9)
