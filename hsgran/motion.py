@@ -495,7 +495,7 @@ def pair_contact_accelerated(rx, ry, rz, wx, wy, wz, ax, ay, az, sigma, horizon,
         # (pressed together: whichever side of σ round-off left them, f falls from here on, and
         # a search past the first piece would miss that contact and let them overlap)
         noise = 2.0 * approach_noise(sigma, v_sum, x_sum)
-        if c1 < -noise or (c2 < 0.0 and c1 <= noise):
+        if c1 < -noise or (c1 <= noise and pressed(c4, c3, c2, s2)):
             return 0.0
     tau = _first_fall(rx, ry, rz, wx, wy, wz, ax, ay, az, gap_at_start(rx, ry, rz, sigma), 1.0,
                       c4, c3, c2, c1, h, touching)
@@ -640,6 +640,25 @@ def _clear_minimum(rx, ry, rz, wx, wy, wz, ax, ay, az, f0, sgn, lo, hi):
 DISTANCE_ROUNDING_ULPS = 8
 
 
+@njit(inline="always")
+def pressed(c4, c3, c2, s2):
+    """Whether a touching pair (or a sphere touching a cylinder) with f = c4 τ⁴ + c3 τ³ + c2 τ² +
+    c1 τ + c0, its approach c1 within rounding, is pressed together [bool]: f'' < 0 now (c2 < 0),
+    and the fall that its accelerations make, the least of c2 τ² + c3 τ³ + c4 τ⁴ over τ > 0, is
+    deeper than the rounding of the distance, DISTANCE_ROUNDING_ULPS units of s2 = σ² [m²] (or
+    unbounded, c4 ≤ 0). A shallower one is the rounding of the accelerations: a sphere in
+    constrained motion, whose acceleration is (v⁺ − v)/h, and a flying neighbour it touches
+    side by side differed by 1e-13 m/s² along their tangent, a fall of 1e-34 m² that no solve
+    can hold (it gives no impulse), and they were met again at one instant until the collapse
+    guard stopped the run. [OURS]"""
+    if c2 >= 0.0:
+        return False
+    if c4 <= 0.0:
+        return True
+    tau = (math.sqrt(9.0 * c3 * c3 - 32.0 * c4 * c2) - 3.0 * c3) / (8.0 * c4)  # g'(τ) = 0
+    return tau * tau * (c2 + tau * (c3 + tau * c4)) < -DISTANCE_ROUNDING_ULPS * ROUNDOFF * s2
+
+
 @njit
 def _way_back(rx, ry, rz, wx, wy, wz, ax, ay, az, sgn, c4, c3, c2, c1, h):
     """A pair overlapping by round-off (f(0) < 0) whose f crosses zero nowhere in [0, h]: the
@@ -714,7 +733,7 @@ def cylinder_contact_time(qx, qy, qz, ux, uy, uz, gx, gy, gz, rho, side, horizon
         # rounding, or pressed against the surface (f'' < 0: gravity or the curvature of the
         # path pushes the centre through it) with no separation to speak of
         noise = 2.0 * approach_noise(rho, v_sum, x_sum)
-        if c1 < -noise or (c2 < 0.0 and c1 <= noise):
+        if c1 < -noise or (c1 <= noise and pressed(c4, c3, c2, s2)):
             return 0.0
     if c4 == 0.0:
         # no acceleration across the axis: |q + uτ| = ρ, a quadratic a τ² + 2 b τ + c = 0

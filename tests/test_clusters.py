@@ -4,17 +4,27 @@ closed forms: a sphere at rest in a V groove, rolling down a tilted groove, slid
 corner, a stack of spheres on a plate, and Newton's cradle of five on a plate."""
 
 import math
+from collections import namedtuple
 
 import numba
 import numpy as np
 import pytest
 
-from hsgran._cluster import HAND_OVER_RAPID, _count
+from hsgran._cluster import (
+    HAND_OVER_RAPID,
+    REACH_SAFETY,
+    STEP_MAX,
+    STEP_TRAVEL_REL,
+    _count,
+    _creates_energy,
+    _step_of,
+)
 from hsgran._state import I_FROZEN, I_SIZE, I_STEP_SWEEPS, I_SWEEPS, I_VISITS, WARM_EMPTY
 from hsgran.engine import Simulation
 from hsgran.events.kinds import EV_CLUSTER
 from hsgran.onplane import MS_REST, MS_SLIDING
 from hsgran.scene import parse_scene
+from hsgran.wallspec import WK_BALL, WK_FACE, WK_MOVING, WK_PLANE
 from tests.scenes import FLOOR, num, plane, sphere
 
 R = 0.001  #: sphere radius of the scenes [m]
@@ -471,3 +481,89 @@ def test_a_bed_that_nothing_holds_alone_is_handed_over_by_its_tc_streak_and_come
     assert (sim.mstate == MS_REST).all()
     assert sim.counts[EV_CLUSTER] > 0
     assert sim.rapid.max() < HAND_OVER_RAPID
+
+
+def _sliding_cluster(velocities, partners):
+    """A cluster for hsgran._cluster._step_of: bodies of radius R at ``velocities`` [m/s], each
+    body b touching the immovable partner ``partners[b]`` below it (normal +z): a wall kind
+    (hsgran.wallspec ``WK_*``, as wall b) or "sphere" (a sphere at rest)."""
+    nb = len(velocities)
+    walls = namedtuple("W", "planes_kind")(np.array(
+        [k if k != "sphere" else WK_PLANE for k in partners], dtype=np.int64))
+    clus = namedtuple("C", "cl_rad cl_v ck_a ck_b ck_q ck_n ck_vb")(
+        np.full(nb, R), np.array(velocities, dtype=float), np.arange(nb),
+        np.full(nb, -1), np.array([100 + b if k == "sphere" else -1 - b
+                                   for b, k in enumerate(partners)]),
+        np.tile([0.0, 0.0, 1.0], (nb, 1)), np.zeros((nb, 3)))
+    return nb, clus, walls
+
+
+@pytest.mark.parametrize(("kind", "slowed"), [(WK_PLANE, False), (WK_MOVING, False),
+                                             (WK_FACE, True), (WK_BALL, True),
+                                             ("sphere", True)])
+def test_a_bed_sliding_as_a_block_takes_steps_of_its_relative_motions(kind, slowed):
+    """A step's length is set by the relative motions within the cluster and against its
+    immovable partners (docs/enduring-contact.md, "Step length and reach"): three spheres
+    sliding together at 1 m/s along an unbounded plane take the longest step, STEP_MAX (their
+    relative speed is the landing speed); on a finite wall's face, a corner or a resting
+    sphere, whose contact the slide carries them off or turns, the step lets them slide
+    STEP_TRAVEL_REL of their radius."""
+    v_land = 1e-3
+    nb, clus, walls = _sliding_cluster([[1.0, 0.0, 0.0]] * 3, [kind] * 3)
+    h, reach = _step_of(nb, nb, 0.1, clus, walls, np.array([0.0, 0.0, -G]), v_land)
+    v_rel = (1.0 if slowed else 0.0) + v_land
+    assert h == pytest.approx(min(STEP_MAX, STEP_TRAVEL_REL * R / v_rel), rel=1e-12)
+    assert reach == pytest.approx(REACH_SAFETY * (v_rel * h + G * h * h), rel=1e-12)
+
+
+def test_a_step_is_cut_by_bodies_moving_apart_and_by_a_normal_speed_at_a_plane():
+    """Two spheres parting at ±0.5 m/s about their mean velocity (3 m/s along the plane) close
+    or open their distance at 1 m/s, twice the largest speed about the mean; a sphere falling
+    onto the plane at 0.2 m/s cuts the step at that speed."""
+    v_land = 1e-3
+    gravity = np.array([0.0, 0.0, -G])
+    nb, clus, walls = _sliding_cluster([[3.5, 0.0, 0.0], [2.5, 0.0, 0.0]], [WK_PLANE] * 2)
+    h, _ = _step_of(nb, nb, 0.1, clus, walls, gravity, v_land)
+    assert h == pytest.approx(STEP_TRAVEL_REL * R / (1.0 + v_land), rel=1e-12)
+    nb, clus, walls = _sliding_cluster([[3.0, 0.0, -0.2], [3.0, 0.0, 0.0]], [WK_PLANE] * 2)
+    h, _ = _step_of(nb, nb, 0.1, clus, walls, gravity, v_land)
+    assert h == pytest.approx(STEP_TRAVEL_REL * R / (0.2 + v_land), rel=1e-12)
+
+
+def _resting_step(end_speed, tgt=0.0, partner_velocity=0.0, rebound=math.nan, pn=None):
+    """A sphere of mass 1 kg resting on a plane (normal +z) for hsgran._cluster._creates_energy:
+    at rest at the step's start, a step of h = 1e-4 s whose solve gave its contact the impulse
+    that ends the step at ``end_speed`` [m/s] along +x (a frozen friction impulse; 0: the
+    plane holds it) and at ``tgt`` [m/s] along the normal, the contact's target (an impact's
+    rebound ``rebound`` [m/s], NaN: none), with the normal impulse ``pn`` [N s] (None: the one
+    that gives the sphere that normal speed; more: a body wedged against others), the plane
+    moving at ``partner_velocity`` [m/s] along +x."""
+    h = 1e-4
+    pt = end_speed  # the tangential impulse [N s] that gives a mass of 1 kg that speed
+    clus = namedtuple("C", "cl_inv_m cl_inv_i cl_v cl_w cl_a cl_al ck_pn ck_pt ck_tgt ck_reb "
+                           "ck_a ck_b ck_n ck_ab")(
+        np.array([1.0]), np.array([1.0]), np.zeros((1, 3)), np.zeros((1, 3)),
+        np.array([[end_speed, 0.0, tgt]]), np.zeros((1, 3)),
+        np.array([h * G + tgt if pn is None else pn]), np.array([[pt, 0.0, 0.0]]),
+        np.array([tgt]), np.array([rebound]), np.array([0]), np.array([-1]),
+        np.array([[0.0, 0.0, 1.0]]), np.array([[partner_velocity, 0.0, 0.0]]))
+    return _creates_energy(1, 1, h, clus, np.array([0.0, 0.0, -G]), True, 1e-10)
+
+
+def test_a_step_whose_frozen_friction_gives_energy_is_not_taken():
+    """A step's solve may meet its contacts and still give its bodies energy, which frozen
+    friction can do (hsgran._cluster._creates_energy; corpus 0-37 sent a resting sphere off
+    at 90 m/s): a sphere at rest on a fixed plane given 0.01 m/s along it gains 5e-5 J, far
+    more than the ½ m (h g)² = 4.8e-7 J that holding it loses; held still, or given that
+    speed by the plane moving beneath it, or lifted by a rebound or an opening target, it
+    gains nothing it may not. A rebound supplies at most its binary rebound's energy, however
+    large the impulse the solve put on it (corpus 0-6: 16.5 N s on a rebound of 1.9 mm/s)."""
+    assert _resting_step(0.01)
+    assert not _resting_step(0.0)
+    assert not _resting_step(1e-4)  # 5e-9 J gained, less than the 4.8e-7 J the hold loses
+    assert not _resting_step(0.01, partner_velocity=0.01)  # the plane carried it
+    assert not _resting_step(0.0, tgt=0.05, rebound=0.05)  # a rebound at its target
+    assert not _resting_step(0.0, tgt=0.05)  # an overlap opened at its target
+    # a wedged body: 16.5 N s at the rebound's 1.9 mm/s would allow 0.03 J, the rebound 2e-6 J
+    assert _resting_step(0.01, tgt=1.9e-3, rebound=1.9e-3, pn=16.5)
+    assert not _resting_step(0.01, tgt=1.9e-3, pn=16.5)  # an opening: its impulse's work

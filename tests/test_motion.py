@@ -137,6 +137,23 @@ def test_touching_pair_pressed_together_without_approach_touches_now():
     assert pair_contact_accelerated(*r, *w, *a, sigma, NEVER, 1e-3, 0.1) == 0.0
 
 
+
+@pytest.mark.parametrize("weak", [1e-9, 1e-7])
+def test_touching_pair_pressed_only_by_rounding_is_not_met_now(weak):
+    """Two spheres falling side by side, one in constrained motion: their accelerations differ
+    by rounding (1e-13 m/s², along the tangent) and their distance by 7e-18 m of tangential
+    offset (hsgran.motion.pressed): f'' < 0, but the fall it makes (~1e-34 m²) is far below the
+    rounding of the distance, so they are not met at once (a solve of it gives no impulse, and
+    they were met again at one instant). A pressing of ``weak`` m/s² along the normal is one."""
+    sigma = 2e-3
+    r = (-sigma, 0.0, 6.938893903907228e-18)
+    w = (0.0, 0.0, 1.942890293094024e-16)
+    a = (0.0, 0.0, -9.592326932761353e-14)
+    vs, xs = 0.25113600000005976, 0.1023927296000012
+    assert pair_contact_accelerated(*r, *w, *a, sigma, 1e-4, vs, xs) > 0.0
+    assert pair_contact_accelerated(*r, *w, *a, sigma, NEVER, vs, xs) > 0.0
+    assert pair_contact_accelerated(*r, *w, weak, 0.0, a[2], sigma, 1e-4, vs, xs) == 0.0
+
 def _return_time(r, w, a, sign=1.0):
     """Reference: the first τ > 0 where sign (|r + wτ + ½aτ²|² − |r|²) falls back through 0,
     by bisection in extended precision after a scan."""

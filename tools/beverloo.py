@@ -41,6 +41,12 @@ FILL_FRACTION = 0.25
 BED_FRACTION = 0.6
 #: Bulk density region: this many bead diameters clear of the wall, the floor and the bed's top.
 CLEAR = 2.0
+#: The recirculating inflow's rate is this many times the most the orifice can pass: a bed of
+#: packing BED_FRACTION crossing its whole area at the free-fall speed √(g D) of an arch of
+#: its span (Beverloo's rate is about 0.6 of that) [-]. The inflow must never hold the
+#: discharge back: with one rate of 40,000 beads/s for every orifice, the D = 20 d silo
+#: (~50,000/s) drained, and its rate fell until the run's end.
+INFLOW_MARGIN = 2.0
 
 SCENE = """
 [scene]
@@ -85,7 +91,7 @@ normal = [0.0, 0.0, 1.0]
 [[inflow]]
 recirculate = true
 region = {{ lower = [{lo}, {lo}, {in0}], upper = [{hi}, {hi}, {in1}] }}
-rate = 40000.0
+rate = {rate}
 interval = 0.005
 """
 
@@ -103,7 +109,11 @@ def silo_scene(dd: float, bed: float, seconds: float, seed: int) -> tuple[str, d
     z0 = 2.0 * RADIUS
     z1 = z0 + count * 4.0 / 3.0 * math.pi * RADIUS ** 3 / (FILL_FRACTION * area)
     height = z1 + 20.0 * d
+    v_bead = 4.0 / 3.0 * math.pi * RADIUS ** 3
+    rate = (INFLOW_MARGIN * BED_FRACTION / v_bead * math.pi / 4.0 * (2.0 * orifice) ** 2
+            * math.sqrt(G * 2.0 * orifice))
     text = SCENE.format(dd=dd, seconds=seconds, seed=seed, half_height=0.5 * height,
+                        rate=f"{rate:.1f}",
                         silo=silo, height=height, orifice=orifice, count=count, radius=RADIUS,
                         lo=-half, hi=half, z0=z0, z1=z1, below=-4.0 * d,
                         in0=bed * d + 4.0 * d, in1=bed * d + 8.0 * d)
@@ -191,7 +201,7 @@ def main() -> None:
     edges = np.linspace(a.warmup, a.seconds, a.windows + 1)
     rows = []
     print(f"{'D/d':>5} {'beads':>6} {'exits':>6} {'W [g/s]':>9} {'±':>7} {'phi_b':>6} "
-          f"{'wall [s]':>9}  guard")
+          f"{'absent':>6} {'wall [s]':>9}  guard")
     for r in results:
         counts, _ = np.histogram(r["exits"], edges)
         rates = counts / np.diff(edges) * m_bead
@@ -199,7 +209,7 @@ def main() -> None:
         phi = bulk_fraction(r["position"], r["present"], r["geo"]["silo"], r["geo"]["bed"])
         rows.append((r["dd"], w, dw, phi))
         print(f"{r['dd']:5.1f} {r['geo']['count']:6d} {r['exits'].size:6d} {1e3 * w:9.3f} "
-              f"{1e3 * dw:7.3f} {phi:6.3f} {r['wall']:9.1f}  "
+              f"{1e3 * dw:7.3f} {phi:6.3f} {int((~r['present']).sum()):6d} {r['wall']:9.1f}  "
               + (f"at {r['guard'][0]:.4f} s: {r['guard'][1]}" if r["guard"] else
                  f"none (ran to {a.seconds} s)"))
     # a run the collapse guard stopped is reported above and left out of the fit
