@@ -576,6 +576,25 @@ def _warm_store(nb, nc, h, clus):
 
 
 @njit(inline="always")
+def _rebound(e, un, an, h):
+    """Normal velocity [m/s] at the end of a step of h [s] of a contact that closes within it
+    at the normal velocity un < 0 [m/s], with restitution e [-] and the relative acceleration
+    an [m/s²] of gravity along its normal (:func:`_setup`): the impact, then free flight for
+    the rest of the step, −e un + h an, where gravity presses the pair together (an ≤ 0; the
+    gravity a body against an immovable partner would otherwise not feel in the step of its
+    bounce, which kept a bead bouncing in a pocket for ever). Where gravity pulls the pair
+    apart (an > 0: an immovable partner above the body's centre) the impact is taken at the
+    step's end, after gravity slowed the approach for the whole step, −e (un + h an): taken
+    at its start, the rebound would gain (1 + e) |un| h an a unit mass on the motion without
+    contacts, which kept a sphere in a groove of two resting spheres bouncing against an
+    overhanging third for ever (corpus 0-15). Either way the rebound's normal speed is at
+    most that of the motion without contacts, |un + h an|, for e ≤ 1. [OURS]"""
+    if an <= 0.0:
+        return -e * un + h * an
+    return -e * (un + h * an)
+
+
+@njit(inline="always")
 def _target(gap, reb, h, slack):
     """Target [m/s] of a contact's normal velocity at the step's end (:func:`_setup`): the
     rebound ``reb`` of an impact (NaN: none), never closing the gap ``gap`` [m] within the step
@@ -632,7 +651,8 @@ def _setup(nb, nc, h, slack, clus, walls, pair_table, mat, rec, gravity, v_land,
     normal velocity at the step's end (``ck_tgt``): an approach faster than the landing speed
     ``v_land`` [m/s] that closes within the step rebounds with the pair's e_n (MODEL §3, as a binary
     collision), −e u, and then flies freely for the step (plus h times the relative acceleration of
-    gravity along the normal, which against an immovable partner brings it back; at least −g/h: a
+    gravity along the normal, which against an immovable partner brings it back, or the impact
+    taken at the step's end where gravity pulls the pair apart: :func:`_rebound`; at least −g/h: a
     rebound that gravity takes back within the step is no rebound at that step's resolution); every
     other contact may close its gap g by the step's end, −g/h, and one that overlaps by more than
     the solve's slack (``slack`` [m/s] over h: what a solve may leave) opens by as much (an overlap
@@ -654,14 +674,12 @@ def _setup(nb, nc, h, slack, clus, walls, pair_table, mat, rec, gravity, v_land,
         gap = clus.ck_gap[c] - _sink(c, h, clus.cl_a, clus, walls)
         clus.ck_reb[c] = math.nan
         if un < -v_land and gap + h * un < 0.0:
-            # the rebound, then free flight for the rest of the step (the gravity a body
-            # against an immovable partner would otherwise not feel in the step of its
-            # bounce, which kept a bead bouncing in a pocket for ever); never closing further
+            # the rebound, then free flight for the rest of the step; never closing further
             an = 0.0
             for k in range(3):
                 ab = gravity[k] if clus.ck_b[c] >= 0 else clus.ck_ab[c, k]
                 an += (gravity[k] - ab) * clus.ck_n[c, k]
-            clus.ck_reb[c] = -_restitution(c, clus, row, rec, flags) * un + h * an
+            clus.ck_reb[c] = _rebound(_restitution(c, clus, row, rec, flags), un, an, h)
         clus.ck_tgt[c] = _target(gap, clus.ck_reb[c], h, slack)
         clus.ck_mu[c] = row[P_MU_S]
         clus.ck_mur[c] = row[P_MU_R]
