@@ -137,7 +137,6 @@ def test_touching_pair_pressed_together_without_approach_touches_now():
     assert pair_contact_accelerated(*r, *w, *a, sigma, NEVER, 1e-3, 0.1) == 0.0
 
 
-
 @pytest.mark.parametrize("weak", [1e-9, 1e-7])
 def test_touching_pair_pressed_only_by_rounding_is_not_met_now(weak):
     """Two spheres falling side by side, one in constrained motion: their accelerations differ
@@ -153,6 +152,7 @@ def test_touching_pair_pressed_only_by_rounding_is_not_met_now(weak):
     assert pair_contact_accelerated(*r, *w, *a, sigma, 1e-4, vs, xs) > 0.0
     assert pair_contact_accelerated(*r, *w, *a, sigma, NEVER, vs, xs) > 0.0
     assert pair_contact_accelerated(*r, *w, weak, 0.0, a[2], sigma, 1e-4, vs, xs) == 0.0
+
 
 def _return_time(r, w, a, sign=1.0):
     """Reference: the first τ > 0 where sign (|r + wτ + ½aτ²|² − |r|²) falls back through 0,

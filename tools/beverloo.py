@@ -33,6 +33,7 @@ import numpy as np
 #: Bead radius [m], and the densities the scene's materials have [kg/m³].
 RADIUS = 0.001
 RHO_GLASS = 2500.0
+V_BEAD = 4.0 / 3.0 * math.pi * RADIUS ** 3  #: a bead's volume [m³]
 G = 9.81  #: [m/s²]
 #: Random loose fill before the beads fall: the fill's volume fraction (placement is random and
 #: non-overlapping, hsgran.placement; far below its jamming limit, so it places at once).
@@ -103,14 +104,13 @@ def silo_scene(dd: float, bed: float, seconds: float, seed: int) -> tuple[str, d
     orifice = 0.5 * dd * d
     silo = dd * d  # the silo's radius: its diameter is 2D
     count = round(BED_FRACTION * math.pi * silo ** 2 * bed * d
-                  / (4.0 / 3.0 * math.pi * RADIUS ** 3))
+                  / V_BEAD)
     half = silo / math.sqrt(2.0) - 1.05 * RADIUS  # a square inside the silo
     area = (2.0 * half) ** 2
     z0 = 2.0 * RADIUS
     z1 = z0 + count * 4.0 / 3.0 * math.pi * RADIUS ** 3 / (FILL_FRACTION * area)
     height = z1 + 20.0 * d
-    v_bead = 4.0 / 3.0 * math.pi * RADIUS ** 3
-    rate = (INFLOW_MARGIN * BED_FRACTION / v_bead * math.pi / 4.0 * (2.0 * orifice) ** 2
+    rate = (INFLOW_MARGIN * BED_FRACTION / V_BEAD * math.pi / 4.0 * (2.0 * orifice) ** 2
             * math.sqrt(G * 2.0 * orifice))
     text = SCENE.format(dd=dd, seconds=seconds, seed=seed, half_height=0.5 * height,
                         rate=f"{rate:.1f}",
