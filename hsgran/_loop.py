@@ -101,6 +101,7 @@ from hsgran._state import (
     F_T_CUR,
     F_T_END,
     F_TC_TIME,
+    F_UNWRAPPED,
     FL_ADHESION,
     FL_COMPLIANCE,
     FL_FRICTION,
@@ -296,6 +297,8 @@ def _on_frame(t, flight, dyn, walls, space, sched, out, fsc, isc, counts, flags,
     if open_system:
         out.fr_left[f] = fsc[F_EXITED]
         out.fr_in[f] = fsc[F_ENTERED]
+    if out.fr_unwrap.shape[0] > 0:  # gravity along a periodic axis
+        out.fr_unwrap[f] = fsc[F_UNWRAPPED]
     for j in range(n):
         if open_system:
             out.fr_pres[f, j] = flight.present[j]
@@ -631,10 +634,10 @@ def _on_exit(i, t, flight, dyn, walls, space, grid, sched, clus, out, fsc, isc, 
 
 
 @njit(inline="always")
-def _on_cell(i, flight, space, grid, isc, counts, ev_partner, large):
+def _on_cell(i, flight, dyn, space, grid, fsc, isc, counts, ev_partner, large, grav_on):
     """Sphere i leaves its cell: move it to the neighbouring one (on a periodic axis wrap its
-    stored state by one box length) and re-predict it, looking at the new layer of
-    neighbouring cells only."""
+    stored state by one box length, and keep the potential energy that hides in
+    ``F_UNWRAPPED``) and re-predict it, looking at the new layer of neighbouring cells only."""
     st, cell, ncell = flight.st, grid.cell, grid.ncell
     code = ev_partner[i]
     k = code // 2
@@ -642,12 +645,18 @@ def _on_cell(i, flight, space, grid, isc, counts, ev_partner, large):
     old = slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell)
     c = cell[i, k] + step
     if space.periodic[k]:
+        shift = 0.0
         if c >= ncell[k]:
             c = 0
-            st[i, k] -= space.box_len[k]
+            shift = -space.box_len[k]
         elif c < 0:
             c = ncell[k] - 1
-            st[i, k] += space.box_len[k]
+            shift = space.box_len[k]
+        if shift != 0.0:
+            st[i, k] += shift
+            # −m g·x of the stored position changes by −m g_k shift; the motion's does not
+            if grav_on and space.gravity[k] != 0.0 and dyn.inv_m[i] > 0.0:
+                fsc[F_UNWRAPPED] += space.gravity[k] * shift / dyn.inv_m[i]
     cell[i, k] = c
     remove(i, old, grid.head, grid.nxt, grid.prv)
     insert(i, slot_of(cell[i, 0], cell[i, 1], cell[i, 2], ncell), grid.head, grid.nxt, grid.prv)
@@ -755,7 +764,8 @@ def _loop_of(grav_on):
                     r = _on_state(i, t, flight, dyn, walls, space, grid, sched, clus, out,
                                   pair_table, fsc, isc, counts, rec, flags, grav_on, ev_partner)
                 elif kind == EV_CELL:  # (EV_NONE has time NEVER and is never popped)
-                    r = _on_cell(i, flight, space, grid, isc, counts, ev_partner, large)
+                    r = _on_cell(i, flight, dyn, space, grid, fsc, isc, counts, ev_partner,
+                                 large, grav_on)
                 else:  # EV_EXIT
                     r = _on_exit(i, t, flight, dyn, walls, space, grid, sched, clus, out, fsc,
                                  isc, counts, flags, grav_on, ev_partner)

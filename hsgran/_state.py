@@ -102,9 +102,10 @@ Clus = namedtuple("Clus", "cl_body cl_loc cl_was cl_depth cl_inv_m cl_inv_i cl_r
 #: motion states per frame; with observables on, ``fr_obs`` the sums ``obs`` of the interval
 #: each frame closes; in an open system, ``fr_pres`` whether each sphere is in the system,
 #: ``fr_left`` the energy the spheres that left carried out until the frame (F_EXITED) and
-#: ``fr_in`` the energy the inserted ones brought in (F_ENTERED) [J].
+#: ``fr_in`` the energy the inserted ones brought in (F_ENTERED) [J]; with gravity along a
+#: periodic axis, ``fr_unwrap`` the potential energy the wraps hid until the frame (F_UNWRAPPED).
 Out = namedtuple("Out", "fr_time fr_pos fr_vel fr_omg log_f log_i fr_ms fr_obs fr_pres "
-                        "fr_left fr_in")
+                        "fr_left fr_in fr_unwrap")
 
 #: The groups in the order the loop takes them.
 GROUPS = (Flight, Dyn, Walls, Space, Grid, Sched, Clus, Out)
@@ -147,7 +148,11 @@ F_CLUSTER_LOSS = 7  #: energy the contact clusters took so far [J] (part of F_DI
 F_EXITED = 8
 #: mechanical energy the spheres inserted by inflows brought into the system [J]
 F_ENTERED = 9
-F_SIZE = 10
+#: potential energy the wraps on periodic axes hid [J]: a sphere that wraps along an axis with
+#: gravity moves by one box length in its stored position, not in its motion, so the potential
+#: of the unwrapped positions is −Σ m g·x of the stored ones plus this (docs/observables.md)
+F_UNWRAPPED = 10
+F_SIZE = 11
 # int scalars
 I_SEQ = 0  #: next sequence number (tie-break)
 I_N_FRAMES = 1  #: frames in the buffer
@@ -273,6 +278,8 @@ class Sizes:
     lines: int = 0  #: rows of the faces' outlines and holes (hsgran.facets)
     part_items: int = 0  #: entries of the parts' cell lists (0: no such parts)
     open_system: bool = False  #: spheres may leave or enter (outlets or inflows)
+    #: gravity acts along a periodic axis: wraps change the stored positions' potential energy
+    unwraps: bool = False
 
     def value(self, symbol) -> int:
         """The size a shape symbol stands for (an int stands for itself)."""
@@ -306,6 +313,8 @@ class Sizes:
             "ps": self.cells + 1 if self.part_items else 0,
             "op": n if self.open_system else 0,
             "fp": self.frames if self.open_system else 0,
+            # gravity along a periodic axis: the potential energy the wraps hid, per frame
+            "fu": self.frames if self.unwraps else 0,
         }[symbol]
 
 
@@ -436,6 +445,7 @@ FIELDS = (
     _f("Out", "fr_pres", "i1", ("fp", "op")),
     _f("Out", "fr_left", "f8", ("fp",)),
     _f("Out", "fr_in", "f8", ("fp",)),
+    _f("Out", "fr_unwrap", "f8", ("fu",)),
 )
 
 

@@ -87,8 +87,9 @@ VISITS_PER_CALL = 100_000_000
 #: solves' warm-start forces under gravity with either treatment, since the pairwise rules
 #: hand zero-time sequences over to cluster solves; 15: the count of cluster solves whose
 #: friction was frozen unconverged, ``I_FROZEN``; 16: constrained motion in steps, each
-#: sphere's ``seg_reach``).
-CHECKPOINT_VERSION = 16
+#: sphere's ``seg_reach``); 17: the potential energy the wraps on periodic axes hid,
+#: ``F_UNWRAPPED``.
+CHECKPOINT_VERSION = 17
 
 
 class SimulationError(HsgranError):
@@ -110,7 +111,9 @@ class FrameBlock:
     angular_velocity: np.ndarray | None  #: [rad/s] (F, N, 3), None without rotation
     kinetic_translational: np.ndarray  #: Σ ½ m v² [J] (F,)
     kinetic_rotational: np.ndarray | None  #: Σ ½ I ω² [J] (F,)
-    potential: np.ndarray  #: −Σ m g·x [J] (F,)
+    #: −Σ m g·x [J] (F,); with gravity along a periodic axis, of the unwrapped positions (the
+    #: stored ones' plus what the wraps hid), so it falls steadily as a chute flows
+    potential: np.ndarray
     #: energy dissipated since t = 0 [J] (F,): the initial mechanical energy minus the present
     #: one (:meth:`Simulation.mechanical_energy`), so it counts every loss: collisions, sliding
     #: friction and rolling resistance on planes, landings and spheres put to rest
@@ -436,7 +439,7 @@ class Simulation:
                       observables=bool(scene.observables), outlets=len(scene.outlets),
                       lines=sum(len(q.lines) for q in scene.parts),
                       part_items=len(part_items),
-                      open_system=scene.open_system)
+                      open_system=scene.open_system, unwraps=scene.unwraps)
         if large is None:
             large = n >= LARGE_FROM
         a = allocate(sizes, packed=large)
@@ -536,8 +539,8 @@ class Simulation:
         """(translational, rotational or None, potential) energy of frames [J], each (F,), of
         the spheres in the system (``present`` (F, N), or all).
 
-        Potential energy is −Σ m g·x (zero at the origin); on a periodic axis along which
-        gravity acts it jumps when a sphere wraps, and so does the dissipated energy.
+        Potential energy is −Σ m g·x of the given positions (zero at the origin); on a periodic
+        axis along which gravity acts the callers add what the wraps hid (``F_UNWRAPPED``).
         """
         if present is not None:
             keep = present[..., None].astype(bool)
@@ -562,6 +565,8 @@ class Simulation:
         kin_t, kin_r, pot = self._energies(pos[None], vel[None],
                                            None if omg is None else omg[None],
                                            self.present[None] if self.scene.open_system else None)
+        if self.scene.unwraps:
+            pot = pot + self.fsc[es.F_UNWRAPPED]
         return float(kin_t[0]), None if kin_r is None else float(kin_r[0]), float(pot[0])
 
     def solver_counts(self) -> dict:
@@ -617,6 +622,8 @@ class Simulation:
         exited = self.fr_left[:f].copy() if open_system else None
         entered = self.fr_in[:f].copy() if open_system else None
         kin_t, kin_r, pot = self._energies(pos, vel, omg, present)
+        if self.scene.unwraps:
+            pot = pot + self.fr_unwrap[:f]
         dissipated = self.energy0 - _mechanical(kin_t, kin_r, pot)
         if open_system:
             dissipated = dissipated + entered - exited

@@ -412,6 +412,14 @@ class Scene:
         return bool(self.outlets or self.inflows)
 
     @property
+    def unwraps(self) -> bool:
+        """Whether gravity acts along a periodic axis: a sphere that wraps there moves by a box
+        length in its stored position, and its potential energy −m g·x jumps (the engine
+        keeps what the wraps hid, ``_state.F_UNWRAPPED``)."""
+        return bool(any(p and g != 0.0 for p, g in zip(self.periodic, self.gravity,
+                                                         strict=True)))
+
+    @property
     def walls(self) -> tuple:
         """Every wall in the order of the engine's wall rows: the planes, the cylinders, then
         the parts of the finite walls and the fixed spheres."""
