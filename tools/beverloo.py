@@ -7,7 +7,8 @@ the bed keeps its height and the flow becomes steady. For each D the tool counts
 windows of the steady part of the run (from ``--warmup`` on), converts them to a mass rate
 W = (exits per second) × m_bead, measures the bed's bulk density (the beads' volume over a
 cylinder away from the wall, the floor and the bed's top, in the last frame, both while it
-drains and, for Beverloo's ρ_b, poured into the widest silo with its orifice closed) and fits
+drains and, for Beverloo's ρ_b, poured into one silo, ``--poured``, with its orifice closed) and
+fits
 
     W = C ρ_b √g (D − k d)^{5/2}
 
@@ -16,9 +17,18 @@ standard errors (from the fit's covariance, scaled by the reduced χ²), the bul
 and each orifice's rate. The silo is narrow (D_silo/D = 2; Beverloo's law is usually checked
 with D_silo > 2.5 D), so the walls are expected to lower C; the study is about the law's form.
 
+The bed is at least ``--bed`` bead diameters high and at least ``--bed-per-orifice`` orifice
+diameters (Beverloo's rate does not depend on the bed's height once the bed is higher than
+about the orifice is wide, Nedderman 1992, ch. 10): 10 d for D ≤ 10 d, D from there on. Each
+orifice up to ``--seeds-upto`` bead diameters runs with each of ``--seeds`` (the narrow ones,
+where beads arch over the orifice, differ most between fills); its rate is the mean over the
+seeds, and its error the larger of the seeds' spread (standard error of their mean) and the
+windows' error combined over the seeds.
+
 Usage:
     .venv/bin/python tools/beverloo.py [--diameters 5,6,8,10,12,15,20] [--seconds 0.5]
-        [--warmup 0.2] [--windows 6] [--bed 10] [--jobs 2]
+        [--warmup 0.2] [--windows 6] [--bed 10] [--bed-per-orifice 1] [--seeds 1,2,3]
+        [--seeds-upto 6] [--poured 10] [--jobs 2]
 """
 
 from __future__ import annotations
@@ -26,7 +36,7 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 
 import numpy as np
 
@@ -126,6 +136,12 @@ def closed(text: str) -> str:
     return "\n".join(line for line in text.splitlines() if not line.startswith("hole ="))
 
 
+def bed_height(dd: float, bed: float, per_orifice: float) -> float:
+    """The bed's height [bead diameters] for an orifice of ``dd`` bead diameters: ``bed`` or
+    ``per_orifice`` × ``dd``, the higher."""
+    return max(bed, per_orifice * dd)
+
+
 def run_one(args) -> dict:
     """Run one orifice (or, ``shut``, the same silo closed); return its exit times, the last
     frame's positions and the run's figures."""
@@ -156,7 +172,7 @@ def run_one(args) -> dict:
         events = sim.run(observers=[Keep()]).events
     except SimulationError as err:  # the collapse guard: reported, not hidden
         guard, events = (sim.time, str(err)), {}
-    return {"dd": dd, "shut": shut, "geo": geo,
+    return {"dd": dd, "seed": seed, "shut": shut, "geo": geo,
             "exits": np.concatenate(exits) if exits else np.zeros(0),
             "position": last["position"], "present": last["present"],
             "wall": time.perf_counter() - wall, "events": events, "guard": guard,
@@ -173,7 +189,27 @@ def bulk_fraction(position, present, silo, bed) -> float:
     z_lo, z_hi = CLEAR * d, top - CLEAR * d
     inside = (np.hypot(x[:, 0], x[:, 1]) < r_in) & (x[:, 2] > z_lo) & (x[:, 2] < z_hi)
     volume = math.pi * r_in ** 2 * max(z_hi - z_lo, 1e-12)
-    return inside.sum() * 4.0 / 3.0 * math.pi * RADIUS ** 3 / volume
+    return inside.sum() * V_BEAD / volume
+
+
+def seed_rate(r: dict, edges, m_bead: float) -> tuple[float, float, float]:
+    """One run's mass rate [kg/s]: the mean over the windows ``edges``, its standard error,
+    and the drift (the later half of the windows' rate over the earlier half's, − 1) [-]."""
+    counts, _ = np.histogram(r["exits"], edges)
+    rates = counts / np.diff(edges) * m_bead
+    half = len(rates) // 2
+    drift = rates[half:].mean() / max(rates[:half].mean(), 1e-300) - 1.0
+    return rates.mean(), rates.std(ddof=1) / math.sqrt(len(rates)), drift
+
+
+def combine(rates: list[float], errors: list[float]) -> tuple[float, float]:
+    """The mean of one orifice's per-seed rates and its error: the larger of the seeds'
+    standard error of the mean and the windows' errors combined (√Σσ²/n)."""
+    n = len(rates)
+    mean = float(np.mean(rates))
+    windows = math.sqrt(sum(e * e for e in errors)) / n
+    spread = float(np.std(rates, ddof=1)) / math.sqrt(n) if n > 1 else 0.0
+    return mean, max(windows, spread)
 
 
 def main() -> None:
@@ -184,43 +220,88 @@ def main() -> None:
     ap.add_argument("--warmup", type=float, default=0.2,
                     help="exits before this time [s] are not counted (the bed forms)")
     ap.add_argument("--windows", type=int, default=6, help="windows of the steady part")
-    ap.add_argument("--bed", type=float, default=10.0, help="bed height [bead diameters]")
-    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--bed", type=float, default=10.0,
+                    help="least bed height [bead diameters]")
+    ap.add_argument("--bed-per-orifice", type=float, default=1.0,
+                    help="least bed height [orifice diameters]")
+    ap.add_argument("--seeds", default="1,2,3",
+                    help="fill seeds, comma-separated, for the orifices up to --seeds-upto")
+    ap.add_argument("--seeds-upto", type=float, default=6.0,
+                    help="orifices wider than this [bead diameters] run the first seed only")
+    ap.add_argument("--poured", type=float, default=10.0,
+                    help="orifice [bead diameters] of the silo poured closed for rho_b")
     ap.add_argument("--jobs", type=int, default=2)
     a = ap.parse_args()
     dds = [float(s) for s in a.diameters.split(",")]
-    # the poured bed's bulk density: the widest silo, closed, from the same fill
-    jobs = [(max(dds), a.bed, a.seconds, a.seed, True)]
-    jobs += [(dd, a.bed, a.seconds, a.seed, False) for dd in sorted(dds, reverse=True)]
-    with ProcessPoolExecutor(max_workers=a.jobs) as pool:
-        results = list(pool.map(run_one, jobs))
-    poured = results.pop(0)
-    results.sort(key=lambda r: r["dd"])
+    seeds = [int(s) for s in a.seeds.split(",")]
+
+    def bed(dd):
+        return bed_height(dd, a.bed, a.bed_per_orifice)
+
+    # the poured bed's bulk density: a silo (--poured), closed, from the same fill; the
+    # largest runs first, so that the last to finish are short
+    jobs = [(dd, bed(dd), a.seconds, seed, False) for dd in sorted(dds, reverse=True)
+            for seed in (seeds if dd <= a.seeds_upto else seeds[:1])]
+    jobs.insert(1, (a.poured, bed(a.poured), a.seconds, seeds[0], True))
     d = 2.0 * RADIUS
-    m_bead = RHO_GLASS * 4.0 / 3.0 * math.pi * RADIUS ** 3
+    m_bead = RHO_GLASS * V_BEAD
     edges = np.linspace(a.warmup, a.seconds, a.windows + 1)
-    rows = []
-    print(f"{'D/d':>5} {'beads':>6} {'exits':>6} {'W [g/s]':>9} {'±':>7} {'phi_b':>6} "
-          f"{'absent':>6} {'wall [s]':>9}  guard")
-    for r in results:
-        counts, _ = np.histogram(r["exits"], edges)
-        rates = counts / np.diff(edges) * m_bead
-        w, dw = rates.mean(), rates.std(ddof=1) / math.sqrt(len(rates))
+    header = (f"{'D/d':>5} {'seed':>4} {'bed/d':>5} {'beads':>6} {'exits':>6} {'W [g/s]':>9} "
+              f"{'±':>7} {'drift':>6} {'phi_b':>6} {'absent':>6} {'wall [s]':>9}  guard")
+
+    def row(r) -> str:
+        w, dw, drift = seed_rate(r, edges, m_bead)
         phi = bulk_fraction(r["position"], r["present"], r["geo"]["silo"], r["geo"]["bed"])
-        rows.append((r["dd"], w, dw, phi))
-        print(f"{r['dd']:5.1f} {r['geo']['count']:6d} {r['exits'].size:6d} {1e3 * w:9.3f} "
-              f"{1e3 * dw:7.3f} {phi:6.3f} {int((~r['present']).sum()):6d} {r['wall']:9.1f}  "
-              + (f"at {r['guard'][0]:.4f} s: {r['guard'][1]}" if r["guard"] else
-                 f"none (ran to {a.seconds} s)"))
-    # a run the collapse guard stopped is reported above and left out of the fit
-    rows = [row for row, r in zip(rows, results, strict=True) if not r["guard"]]
-    dd, w, dw, phi = (np.array(c) for c in zip(*rows, strict=True))
+        return (f"{r['dd']:5.1f} {r['seed']:4d} {r['geo']['bed'] / d:5.1f} "
+                f"{r['geo']['count']:6d} {r['exits'].size:6d} {1e3 * w:9.3f} {1e3 * dw:7.3f} "
+                f"{100 * drift:+5.1f}% {phi:6.3f} {int((~r['present']).sum()):6d} "
+                f"{r['wall']:9.1f}  "
+                + (f"at {r['guard'][0]:.4f} s: {r['guard'][1]}" if r["guard"] else
+                   f"none (ran to {a.seconds} s)")
+                + ("  (closed: rho_b)" if r["shut"] else ""))
+
+    results, poured = [], None
+    print("as each run ends:\n" + header, flush=True)
+    with ProcessPoolExecutor(max_workers=a.jobs) as pool:
+        for future in as_completed([pool.submit(run_one, job) for job in jobs]):
+            r = future.result()
+            print(row(r), flush=True)
+            if r["shut"]:
+                poured = r
+            else:
+                results.append(r)
+    results.sort(key=lambda r: (r["dd"], r["seed"]))
+    print("\n" + header)
+    per_orifice: dict[float, list] = {}
+    for r in results:
+        print(row(r))
+        w, dw, _ = seed_rate(r, edges, m_bead)
+        phi = bulk_fraction(r["position"], r["present"], r["geo"]["silo"], r["geo"]["bed"])
+        # a run the collapse guard stopped is reported above and left out of the fit
+        if not r["guard"]:
+            per_orifice.setdefault(r["dd"], []).append((w, dw, phi))
+    rows = []
+    for dd_, runs in sorted(per_orifice.items()):
+        w, dw = combine([x[0] for x in runs], [x[1] for x in runs])
+        rows.append((dd_, w, dw, float(np.mean([x[2] for x in runs])), len(runs)))
+    dd, w, dw, phi, n_seeds = (np.array(c) for c in zip(*rows, strict=True))
+    if n_seeds.max() > 1:
+        print("over the seeds: " + ", ".join(
+            f"{di:g} d: {1e3 * wi:.3f} ± {1e3 * ei:.3f} g/s ({ni} seeds)"
+            for di, wi, ei, ni in zip(dd, w, dw, n_seeds, strict=True) if ni > 1))
     phi_b = bulk_fraction(poured["position"], poured["present"], poured["geo"]["silo"],
                           poured["geo"]["bed"])
     if poured["guard"]:
         print(f"the closed pour stopped at the collapse guard at {poured['guard'][0]:.4f} s; "
               "its bed is measured there")
     rho_b = RHO_GLASS * phi_b
+    print(f"bulk density rho_b = {rho_b:.0f} kg/m^3: phi = {phi_b:.3f} of glass "
+          f"({RHO_GLASS:.0f}) in the poured bed of the D = {poured['dd']:g} d silo, closed, at "
+          f"{a.seconds} s ({poured['wall']:.0f} s of wall time); while draining, phi_b above "
+          f"is {phi.min():.3f}-{phi.max():.3f}")
+    if len(dd) < 3:
+        print(f"no fit: {len(dd)} orifice(s) ran to the end, the law's two parameters need 3")
+        return
     from scipy.optimize import curve_fit
 
     def law(dd_, c, k):
@@ -229,10 +310,6 @@ def main() -> None:
     (c, k), cov = curve_fit(law, dd, w, p0=(0.58, 1.5), sigma=np.maximum(dw, 1e-12 * w.max()),
                             absolute_sigma=False)
     ec, ek = np.sqrt(np.diag(cov))
-    print(f"bulk density rho_b = {rho_b:.0f} kg/m^3: phi = {phi_b:.3f} of glass "
-          f"({RHO_GLASS:.0f}) in the poured bed of the D = {poured['dd']:g} d silo, closed, at "
-          f"{a.seconds} s ({poured['wall']:.0f} s of wall time); while draining, phi_b above "
-          f"is {phi.min():.3f}-{phi.max():.3f}")
     print(f"Beverloo fit: C = {c:.3f} ± {ec:.3f}, k = {k:.2f} ± {ek:.2f} "
           f"({len(dd)} orifices, D = {dd.min():g}-{dd.max():g} d)")
     print("residuals [%]: " + ", ".join(f"{100 * (wi / law(di, c, k) - 1):+.1f}"
