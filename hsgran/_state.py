@@ -150,7 +150,8 @@ F_EXITED = 8
 F_ENTERED = 9
 #: potential energy the wraps on periodic axes hid [J]: a sphere that wraps along an axis with
 #: gravity moves by one box length in its stored position, not in its motion, so the potential
-#: of the unwrapped positions is −Σ m g·x of the stored ones plus this (docs/observables.md)
+#: of the unwrapped positions is −Σ m g·x of the stored ones plus this
+#: (docs/trajectory-format.md, "Observables")
 F_UNWRAPPED = 10
 F_SIZE = 11
 # int scalars
