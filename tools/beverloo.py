@@ -249,12 +249,17 @@ def main() -> None:
     header = (f"{'D/d':>5} {'seed':>4} {'bed/d':>5} {'beads':>6} {'exits':>6} {'W [g/s]':>9} "
               f"{'±':>7} {'drift':>6} {'phi_b':>6} {'absent':>6} {'wall [s]':>9}  guard")
 
+    def measure(r) -> dict:
+        """The run ``r`` with its rate, error and drift (seed_rate) and bulk fraction."""
+        r["w"], r["dw"], r["drift"] = seed_rate(r, edges, m_bead)
+        r["phi"] = bulk_fraction(r["position"], r["present"], r["geo"]["silo"], r["geo"]["bed"])
+        return r
+
     def row(r) -> str:
-        w, dw, drift = seed_rate(r, edges, m_bead)
-        phi = bulk_fraction(r["position"], r["present"], r["geo"]["silo"], r["geo"]["bed"])
         return (f"{r['dd']:5.1f} {r['seed']:4d} {r['geo']['bed'] / d:5.1f} "
-                f"{r['geo']['count']:6d} {r['exits'].size:6d} {1e3 * w:9.3f} {1e3 * dw:7.3f} "
-                f"{100 * drift:+5.1f}% {phi:6.3f} {int((~r['present']).sum()):6d} "
+                f"{r['geo']['count']:6d} {r['exits'].size:6d} {1e3 * r['w']:9.3f} "
+                f"{1e3 * r['dw']:7.3f} {100 * r['drift']:+5.1f}% {r['phi']:6.3f} "
+                f"{int((~r['present']).sum()):6d} "
                 f"{r['wall']:9.1f}  "
                 + (f"at {r['guard'][0]:.4f} s: {r['guard'][1]}" if r["guard"] else
                    f"none (ran to {a.seconds} s)")
@@ -264,7 +269,7 @@ def main() -> None:
     print("as each run ends:\n" + header, flush=True)
     with ProcessPoolExecutor(max_workers=a.jobs) as pool:
         for future in as_completed([pool.submit(run_one, job) for job in jobs]):
-            r = future.result()
+            r = measure(future.result())
             print(row(r), flush=True)
             if r["shut"]:
                 poured = r
@@ -275,11 +280,9 @@ def main() -> None:
     per_orifice: dict[float, list] = {}
     for r in results:
         print(row(r))
-        w, dw, _ = seed_rate(r, edges, m_bead)
-        phi = bulk_fraction(r["position"], r["present"], r["geo"]["silo"], r["geo"]["bed"])
         # a run the collapse guard stopped is reported above and left out of the fit
         if not r["guard"]:
-            per_orifice.setdefault(r["dd"], []).append((w, dw, phi))
+            per_orifice.setdefault(r["dd"], []).append((r["w"], r["dw"], r["phi"]))
     rows = []
     for dd_, runs in sorted(per_orifice.items()):
         w, dw = combine([x[0] for x in runs], [x[1] for x in runs])
@@ -289,8 +292,7 @@ def main() -> None:
         print("over the seeds: " + ", ".join(
             f"{di:g} d: {1e3 * wi:.3f} ± {1e3 * ei:.3f} g/s ({ni} seeds)"
             for di, wi, ei, ni in zip(dd, w, dw, n_seeds, strict=True) if ni > 1))
-    phi_b = bulk_fraction(poured["position"], poured["present"], poured["geo"]["silo"],
-                          poured["geo"]["bed"])
+    phi_b = poured["phi"]
     if poured["guard"]:
         print(f"the closed pour stopped at the collapse guard at {poured['guard'][0]:.4f} s; "
               "its bed is measured there")
