@@ -1356,9 +1356,10 @@ def _stepped(i, j, w, t, fast, nb, nc, flight, dyn, walls, space, grid, sched, c
 def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, isc, pair_table,
                       fsc, rec, flags):
     """A collision of sphere i with sphere j (j ≥ 0) or plane w at time t [s] under gravity:
-    CL_ISOLATED if the two touch nothing else and fly (the caller collides them as a pair;
-    nothing has changed but the spheres' stored states, advanced to t), else the cluster
-    takes a step from t (CL_SOLVED; ``rec`` holds the event's impulse and the energy
+    CL_ISOLATED if the two touch nothing else and fly, and neither is in a sequence of
+    collisions that binary collisions have not ended (:func:`_streaked`) (the caller collides
+    them as a pair; nothing has changed but the spheres' stored states, advanced to t), else the
+    cluster takes a step from t (CL_SOLVED; ``rec`` holds the event's impulse and the energy
     taken)."""
     mstate, st, v_land = flight.mstate, flight.st, fsc[F_LANDING_SPEED]
     if j >= 0:
@@ -1375,12 +1376,16 @@ def cluster_collision(i, j, w, t, flight, dyn, walls, space, grid, sched, clus, 
     fast = un < -v_land
     nb, nc, driven, _ = gather(i, j, t, fast, ALL_CONTACTS, 0.0, flight, dyn, walls, space,
                                grid, clus, flags[FL_ROTATION])
-    if (nc == 1 and nb == (2 if j >= 0 else 1) and mstate[i] == MS_FLIGHT
-            and (j < 0 or mstate[j] == MS_FLIGHT)) or (
+    binary = (nc == 1 and nb == (2 if j >= 0 else 1) and mstate[i] == MS_FLIGHT
+              and (j < 0 or mstate[j] == MS_FLIGHT))
+    if (binary and not (_streaked(i, dyn) or (j >= 0 and _streaked(j, dyn)))) or (
             driven and not flags[FL_CLUSTERS] and mstate[i] != MS_SUPPORTED
             and (j < 0 or mstate[j] != MS_SUPPORTED)):
-        # a binary collision; or a hand-over (:func:`hands_over`) beside a moving plane,
-        # which the treatment takes only as it moves now: left to the pairwise rules
+        # a binary collision, unless it is one of a zero-time sequence that binary collisions
+        # have not ended (a sphere grazing the inside of a cylinder, pressed into it by its
+        # curvature at no normal speed: no impulse, met again at once); or a hand-over
+        # (:func:`hands_over`) beside a moving plane, which the treatment takes only as it
+        # moves now: left to the pairwise rules
         release(nb, clus)
         return CL_ISOLATED
     _stepped(i, j, w, t, fast, nb, nc, flight, dyn, walls, space, grid, sched, clus, isc,
