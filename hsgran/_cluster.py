@@ -1065,7 +1065,7 @@ def _lowest_gap(g0, rel_v, rel_a, h):
 
 
 @njit
-def _flies_clear(b, nc, h, clus, gravity, slack):
+def _flies_clear(b, nc, h, clus, walls, gravity, slack):
     """Whether body b, which the step's solve gave no impulse, can fly on its exact parabola
     from now without closing a contact of the step within it [bool]. The solve kept its
     contacts open for the step's motion of it (:func:`_linear_parts`), not for its flight: a
@@ -1079,8 +1079,12 @@ def _flies_clear(b, nc, h, clus, gravity, slack):
     to its slack, so it can leave a touching contact approaching at, say, 3e-14 m/s with no
     impulse; in flight the prediction meets that contact at once, and the solve that follows
     gives it no impulse again: a sphere of a 2000-sphere pour met its side wall a thousand
-    times at one instant until the collapse guard stopped the run. Such a sphere moves on in
-    constrained motion instead, which holds its contacts for the step."""
+    times at one instant until the collapse guard stopped the run. Likewise a sphere touching
+    the inside of a cylinder that the curvature alone presses into it: its straight motion
+    over the step would sink into the side (:func:`_sink`) further than its normal velocity
+    takes it away, however little (a sphere grazing at 10⁻⁵ m/s sinks by ~10⁻²⁰ m, below the
+    slack and the rounding alike, but the prediction meets it at once). Such a sphere moves on
+    in constrained motion instead, which holds its contacts for the step."""
     v_sum = abs(clus.cl_v[b, 0]) + abs(clus.cl_v[b, 1]) + abs(clus.cl_v[b, 2])
     noise = APPROACH_NOISE_ULPS * ROUNDOFF * v_sum  # at most the prediction's for both kinds
     for c in range(nc):
@@ -1115,9 +1119,20 @@ def _flies_clear(b, nc, h, clus, gravity, slack):
             low = min(low, _lowest_gap(clus.ck_gap[c], fly_v, 0.0, h))
         if low < -slack * h:
             return False
-        if _touching_now(c, b, o, clus) and min(rel_v, fly_v if may_fly else rel_v) < -noise:
+        if _touching_now(c, b, o, clus) and (
+                min(rel_v, fly_v if may_fly else rel_v) < -noise
+                or (o < 0 and _presses(c, rel_v, h, clus, walls))):
             return False
     return True
+
+
+@njit(inline="always")
+def _presses(c, rel_v, h, clus, walls):
+    """Whether the curvature of the concave wall of contact c presses its body into it over a
+    step of h [s] (:func:`_sink` positive) faster than its normal velocity ``rel_v`` [m/s]
+    takes it away [bool]."""
+    sink = _sink(c, h, clus.cl_v, clus, walls)
+    return sink > 0.0 and rel_v * h < sink
 
 
 @njit(inline="always")
@@ -1168,7 +1183,7 @@ def _apply_states(nb, nc, t, h, reach, flight, dyn, walls, space, grid, sched, c
             mplane[s] = code
             flight.seg_end[s] = NEVER
             flight.seg_code[s] = END_NONE
-        elif count == 0 and _flies_clear(b, nc, h, clus, gravity, space.slack[0]):
+        elif count == 0 and _flies_clear(b, nc, h, clus, walls, gravity, space.slack[0]):
             # no impulse in the step: it flies, exactly, from now
             for k in range(3):
                 st[s, 3 + k] = clus.cl_v[b, k]
