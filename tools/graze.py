@@ -59,7 +59,7 @@ treatment = "{treatment}"
 [[contacts]]
 between = ["glass", "steel"]
 restitution = {e!r}
-sliding_friction = {max(mu, 0.1)!r}
+sliding_friction = {mu!r}
 [[walls]]
 kind = "cylinder"
 center = [0.0, 0.0, 0.5]
