@@ -244,8 +244,15 @@ FIELD_MIN = 2
 
 
 #: Most bodies a cluster of contacts solves together (hsgran._cluster): moving spheres beyond
-#: are its boundary, moving as they were.
-MAX_CLUSTER_BODIES = 4096
+#: are its boundary, moving as they were. The room is the scene's spheres up to this many
+#: (4.4 kB of scratch each, for 16 contacts of 33 numbers; at most 290 MB, in pages the
+#: system commits only as a solve first uses them). A boundary inside a connected bed holds
+#: the bodies it touches as if immovable while they fall onto it, and such a step has no
+#: solution: a silo of 12,150 beads whose flowing bed of ~7,000 exceeded the room of 4,096
+#: it had until 2026-12-08 took 46–52 s of CPU a step and ended 7e-3 m/s short of its
+#: targets; with the whole bed in the room, 3 s, met to 1e-12 m/s (docs/enduring-contact.md,
+#: "The room is the scene").
+MAX_CLUSTER_BODIES = 1 << 16
 #: Room for contacts per body of a cluster: a sphere among spheres three times smaller touches
 #: up to ~30 of them, but each contact is stored once, by the first of its two bodies, so a
 #: cluster averages about 3 (half the coordination number of a pile) plus its walls.

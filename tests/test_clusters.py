@@ -20,7 +20,17 @@ from hsgran._cluster import (
     _rebound,
     _step_of,
 )
-from hsgran._state import I_FROZEN, I_SIZE, I_STEP_SWEEPS, I_SWEEPS, I_VISITS, WARM_EMPTY
+from hsgran._state import (
+    CONTACTS_PER_BODY,
+    I_FROZEN,
+    I_SIZE,
+    I_STEP_SWEEPS,
+    I_SWEEPS,
+    I_VISITS,
+    MAX_CLUSTER_BODIES,
+    WARM_EMPTY,
+    Sizes,
+)
 from hsgran.engine import Simulation
 from hsgran.events.kinds import EV_CLUSTER
 from hsgran.onplane import MS_REST, MS_SLIDING
@@ -592,3 +602,19 @@ def test_a_step_whose_frozen_friction_gives_energy_is_not_taken():
     # a wedged body: 16.5 N s at the rebound's 1.9 mm/s would allow 0.03 J, the rebound 2e-6 J
     assert _resting_step(0.01, tgt=1.9e-3, rebound=1.9e-3, pn=16.5)
     assert not _resting_step(0.01, tgt=1.9e-3, pn=16.5)  # an opening: its impulse's work
+
+
+@pytest.mark.parametrize("n", [1, 4097, 12150, 28800])
+def test_a_clusters_room_holds_every_sphere_of_a_silo(n):
+    """The cluster scratch holds every sphere of the scene, up to MAX_CLUSTER_BODIES: a bed
+    beyond the room is the solve's boundary, held as if immovable while it falls onto the
+    bodies it touches, and that step has no solution (the Beverloo silo of 12,150 beads,
+    docs/enduring-contact.md, "A hand-over takes over a dense flow"). The silos of
+    tools/beverloo.py (up to 28,800 beads) fit whole; without gravity there are no clusters."""
+    assert MAX_CLUSTER_BODIES >= 28800
+    sizes = Sizes(n=n, gravity=True, rotation=True, planes=2, cells=8, row=4, frames=1, log=1,
+                  clusters=True)
+    assert (sizes.value("cb"), sizes.value("ck")) == (n, CONTACTS_PER_BODY * n)
+    without = Sizes(n=n, gravity=False, rotation=True, planes=2, cells=8, row=4, frames=1,
+                    log=1)
+    assert (without.value("cb"), without.value("ck")) == (1, 1)
