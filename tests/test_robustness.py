@@ -296,6 +296,33 @@ def test_guard_context_names_what_the_sphere_touches():
         "touches 0 spheres (-) and planes -")
 
 
+ROLLING = ("[scene]\nduration = 0.05\ngravity = [0.0, 0.0, -9.81]\n"
+           "effects = [\"gravity\", \"rotation\", \"friction\", \"rolling_resistance\"]\n"
+           "[output]\nframe_interval = 0.05\n[[contacts]]\nbetween = [\"steel\", \"steel\"]\n"
+           "restitution = 0.5\nsliding_friction = 0.3\nrolling_friction = 0.001\n" + FLOOR)
+
+
+def test_a_sphere_rolling_alone_on_a_floor_is_reported_with_its_closed_form_stop():
+    """A sphere set sliding on a floor at 4 mm/s rolls after 0.4 ms (docs/model.md §5.3) and,
+    beside a sphere lying still, is the scene's only mover: it rolls alone, and its scheduled
+    stop is where (5/7) μ_r g takes its speed. Two spheres rolling side by side, touching,
+    are movers but no lone rollers."""
+    sim = Simulation(parse_scene(ROLLING + sphere(("0.0", "0.0", "0.001"),
+                                                  ("0.004", "0.0", "0.0"))
+                                 + sphere(("0.0", "0.01", "0.001"))))
+    sim.run()
+    t = sim.scene.duration
+    _, vel = sim.state_at(t)
+    movers, alone, stops_by = rb.rolling_out(sim, rb.space_of(sim.scene), t)
+    assert (movers, alone) == (1, 1)  # the other sphere lies still on the floor
+    decel = 5.0 / 7.0 * 0.001 * 9.81
+    assert stops_by == pytest.approx(t + np.linalg.norm(vel[0]) / decel, rel=1e-9)
+    pair = Simulation(parse_scene(ROLLING + sphere(("0.0", "0.0", "0.001"), ("0.004", "0.0", "0.0"))
+                                  + sphere(("0.0", "0.002", "0.001"), ("0.004", "0.0", "0.0"))))
+    pair.run()
+    assert rb.rolling_out(pair, rb.space_of(pair.scene), 0.05)[:2] == (2, 0)
+
+
 def test_the_pace_of_a_timed_out_scene():
     progress = [{"wall": w, "t_reached": 0.1 + 1e-4 * w} for w in range(0, 100, 2)]
     assert rb._pace(progress) == ("; simulated time advanced 0.0001 s per wall second over "

@@ -74,6 +74,11 @@ kind (hsgran.events.kinds), and, from frames every :data:`FRAME_INTERVAL`:
   :data:`SURFACE_DEPTH_DIAMETERS` below the bed surface of their column (columns
   :data:`COLUMN_DIAMETERS` wide, surface = highest sphere top of the bed in the column; the bed
   = spheres connected through contacts to a plane);
+- of a completed scene, the spheres still moving at its end (``movers``) and how many of them
+  roll alone on a plane to a stop the engine has scheduled (``rolling_alone``, the latest
+  stop ``stops_by``; :func:`rolling_out`): the summary names the scenes expected to rest
+  whose only movers are such spheres, which stop as the model says after the scene's end
+  (they do not count as at rest);
 - the energy the run dissipated (``Simulation.dissipated_energy``, every mechanism) and the
   part the collision model took (``collision_loss``), with the rule counts land, tc, hop and
   wedge;
@@ -1106,7 +1111,48 @@ def run_scene_text(text: str, emit=None) -> dict:
         phi, count = bulk_packing_fraction(pos, scene.radius, probe.space)
         result["bulk_packing"] = None if math.isnan(phi) else phi
         result["probes"] = count
+    result["movers"] = result["rolling_alone"] = result["stops_by"] = None
+    if outcome == "completed":
+        result["movers"], result["rolling_alone"], result["stops_by"] = rolling_out(
+            sim, probe.space, max(sim.time, scene.duration))
     return result
+
+
+def _touching(pos, radius, sphere: int, space: Space):
+    """Which spheres touch ``sphere`` within :data:`TOUCH_SLACK` (boolean mask, itself False),
+    across periodic axes."""
+    delta = pos - pos[sphere]
+    per = space.periodic
+    delta[:, per] -= space.period[per] * np.round(delta[:, per] / space.period[per])
+    near = np.linalg.norm(delta, axis=1) <= (radius + radius[sphere]) * (1.0 + TOUCH_SLACK)
+    near[sphere] = False
+    return near
+
+
+def rolling_out(sim, space: Space, t: float) -> tuple[int, int, float | None]:
+    """The spheres still moving at time ``t`` [s] (≥ the last event; speed ≥
+    :data:`REST_SPEED`), and which of them roll alone on a plane to a stop the engine has
+    scheduled: motion state rolling, its segment ending where the speed vanishes
+    (``END_STOP``), touching no other sphere (:func:`_touching`). Such a sphere decelerates
+    at the closed-form (5/7) μ_r g of docs/model.md §5.3, whatever the scene around it: a
+    sphere that a pile kicked out at 3 mm/s onto a floor with μ_r = 7e-4 (corpus 0-15 at
+    N ≤ 3000) stops 0.6 s after the corpus's second of settling, moving as the model says.
+    Returns (movers, of them rolling alone, the latest of their scheduled stops [s] or
+    None)."""
+    from hsgran.onplane import END_STOP, MS_ROLLING
+
+    pos, vel = sim.state_at(t)
+    speed = np.linalg.norm(vel, axis=1)
+    movers = np.flatnonzero(speed >= REST_SPEED)
+    alone, latest = 0, None
+    if not sim.scene.effects.gravity:  # (no motion on planes)
+        return len(movers), alone, latest
+    for k in movers:
+        if (sim.mstate[k] == MS_ROLLING and sim.seg_code[k] == END_STOP
+                and not _touching(pos, sim.scene.radius, int(k), space).any()):
+            alone += 1
+            latest = max(latest or 0.0, float(sim.seg_end[k]))
+    return len(movers), alone, latest
 
 
 def guard_context(sim, space: Space, sphere: int) -> str:
@@ -1116,11 +1162,7 @@ def guard_context(sim, space: Space, sphere: int) -> str:
 
     pos, _ = sim.state_at(sim.time)
     radius = sim.scene.radius
-    delta = pos - pos[sphere]
-    per = space.periodic
-    delta[:, per] -= space.period[per] * np.round(delta[:, per] / space.period[per])
-    near = np.linalg.norm(delta, axis=1) <= (radius + radius[sphere]) * (1.0 + TOUCH_SLACK)
-    near[sphere] = False
+    near = _touching(pos, radius, sphere, space)
     planes = [sim.scene.planes[w].key for w in np.flatnonzero(
         plane_distances(pos[sphere:sphere + 1], space)[0] <= radius[sphere] * (1 + TOUCH_SLACK))]
     states = [MOTION_STATE_NAMES[sim.mstate[k]] for k in np.flatnonzero(near)]
@@ -1223,6 +1265,8 @@ def make_row(spec: SceneSpec, result: dict, wall: float) -> dict:
            "last_arrival": result.get("last_arrival"),
            "not_arrived": result.get("not_arrived"), "at_rest": result.get("at_rest"),
            "bulk_packing": result.get("bulk_packing"), "probes": result.get("probes"),
+           "movers": result.get("movers"), "rolling_alone": result.get("rolling_alone"),
+           "stops_by": result.get("stops_by"),
            "dissipated": result.get("dissipated"),
            "collision_loss": result.get("collision_loss"),
            **{k: result.get(k) for k in SOLVER_COUNTS}}
@@ -1315,6 +1359,14 @@ def summary(rows: list[dict]) -> list[str]:
                  f"{count['guard']}, timeout {count['timeout']}, error {count['error']}; "
                  f"worst overlap {worst:.3g} ({where}); at rest among the scenes expected to "
                  f"rest {rate}")
+    rolling = [r for r in expected if r["outcome"] == "completed" and r["time_to_rest"] is None
+               and r.get("movers") and r.get("rolling_alone") == r.get("movers")]
+    if rolling:
+        lines.append(
+            f"of the others, {len(rolling)} end with nothing moving but spheres rolling alone "
+            "on a plane to a stop the engine has scheduled (rolling_out): "
+            + ", ".join(f"{r['id']} ({_g(r['movers'], 'd')} spheres, stopped by "
+                        f"{float(r['stops_by']):.3f} s)" for r in rolling))
     return lines
 
 
