@@ -1134,9 +1134,9 @@ def rolling_out(sim, space: Space, t: float) -> tuple[int, int, float | None]:
     :data:`REST_SPEED`), and which of them roll alone on a plane to a stop the engine has
     scheduled: motion state rolling, its segment ending where the speed vanishes
     (``END_STOP``), touching no other sphere (:func:`_touching`). Such a sphere decelerates
-    at the closed-form (5/7) μ_r g of docs/model.md §5.3, whatever the scene around it: a
-    sphere that a pile kicked out at 3 mm/s onto a floor with μ_r = 7e-4 (corpus 0-15 at
-    N ≤ 3000) stops 0.6 s after the corpus's second of settling, moving as the model says.
+    at the closed-form (5/7) μ_r g of docs/model.md §5.3, whatever the scene around it: one
+    still rolling at 3.1 mm/s on the floor (μ_r = 7e-4) at the end of corpus 0-15 (at N ≤
+    3000), 1 s after the last arrival, stops 0.62 s later, moving as the model says.
     Returns (movers, of them rolling alone, the latest of their scheduled stops [s] or
     None)."""
     from hsgran.onplane import END_STOP, MS_ROLLING
